@@ -1,0 +1,1 @@
+//! gyro-analysis (placeholder until its issue lands)

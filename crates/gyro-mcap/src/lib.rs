@@ -1,0 +1,1 @@
+//! gyro-mcap (placeholder until its issue lands)

@@ -1,0 +1,1 @@
+//! gyro-model (placeholder until its issue lands)

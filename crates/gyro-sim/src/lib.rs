@@ -1,0 +1,1 @@
+//! gyro-sim (placeholder until its issue lands)

@@ -1,0 +1,1 @@
+//! gyro-view (placeholder until its issue lands)
