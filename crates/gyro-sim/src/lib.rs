@@ -1,1 +1,2 @@
-//! gyro-sim (placeholder until its issue lands)
+//! gyro-sim: scenes and ship-motion programs, integrators, the run loop.
+pub mod solvers;

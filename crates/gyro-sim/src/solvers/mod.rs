@@ -1,0 +1,1 @@
+//! Integrators (owned by the solvers work).
