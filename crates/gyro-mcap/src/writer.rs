@@ -1,0 +1,894 @@
+//! Writing recordings: [`RecordingWriter`] (typed channels, the public API) over [`Sink`] (MCAP
+//! records, chunking, indexes and the summary; also used by `recover` to re-emit raw messages).
+
+use std::collections::{BTreeMap, HashMap};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::error::{RecordingError, io_error};
+use crate::format::{
+    MAGIC, begin_record, end_record, len32, op, patch_u32, put_bytes32, put_str, put_str_map,
+    put_u16, put_u32, put_u64,
+};
+use crate::schema::{
+    FRAME_TRANSFORM_FDS, FieldKind, POSE_SCHEMA_NAME, Pose, RecordSchema, Tag, Value, WIRE_FIXED64,
+    WIRE_LEN, WIRE_VARINT, encode_pose, pose_encoded_len, put_varint, varint_len,
+};
+
+/// How the writer cuts and compresses chunks. Plain data; `Default` gives the values below.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WriterOptions {
+    /// Uncompressed bytes of records after which a chunk is closed. Default 1 MiB.
+    pub chunk_size_bytes: u64,
+    /// zstd level of chunk compression. Default 3 (zstd's own default).
+    pub zstd_level: i32,
+    /// Wall-clock seconds after which an open chunk is closed and handed to the operating system,
+    /// however small, so a killed process loses at most this much. Default 1.0.
+    pub flush_interval_s: f64,
+}
+
+impl Default for WriterOptions {
+    fn default() -> Self {
+        Self {
+            chunk_size_bytes: 1 << 20,
+            zstd_level: 3,
+            flush_interval_s: 1.0,
+        }
+    }
+}
+
+/// What [`RecordingWriter::finish`] wrote.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct WriteSummary {
+    /// The final path (the `.partial` file was renamed to it).
+    pub path: PathBuf,
+    /// File size in bytes.
+    pub bytes: u64,
+    /// Messages on all channels.
+    pub messages: u64,
+}
+
+/// A channel handle returned by the `add_*_channel` calls of one writer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ChannelId(u32);
+
+/// The file, its position and the running CRC of the section being written.
+struct Out {
+    path: PathBuf,
+    file: BufWriter<File>,
+    pos: u64,
+    crc: crc32fast::Hasher,
+}
+
+impl Out {
+    fn emit(&mut self, bytes: &[u8]) -> Result<(), RecordingError> {
+        self.crc.update(bytes);
+        self.pos += bytes.len() as u64;
+        self.file
+            .write_all(bytes)
+            .map_err(io_error(&self.path, "writing"))
+    }
+}
+
+struct SinkChannel {
+    id: u16,
+    topic: String,
+    sequence: u32,
+    message_count: u64,
+    /// (log_time, offset in the chunk's records) of this chunk's messages.
+    chunk_index: Vec<(u64, u64)>,
+}
+
+/// MCAP records to a file: chunks with message indexes, then DataEnd, summary and footer.
+pub(crate) struct Sink {
+    out: Out,
+    chunk_size: usize,
+    compressor: zstd::bulk::Compressor<'static>,
+    chunk: Vec<u8>,
+    compressed: Vec<u8>,
+    chunk_start_time: u64,
+    chunk_end_time: u64,
+    touched: Vec<usize>,
+    channels: Vec<SinkChannel>,
+    slot_of_id: HashMap<u16, usize>,
+    /// Summary records, already encoded, by group.
+    schema_records: Vec<u8>,
+    channel_records: Vec<u8>,
+    chunk_index_records: Vec<u8>,
+    attachment_index_records: Vec<u8>,
+    metadata_index_records: Vec<u8>,
+    schemas: Vec<(String, String, Vec<u8>)>,
+    message_count: u64,
+    message_start_time: u64,
+    message_end_time: u64,
+    chunk_count: u32,
+    attachment_count: u32,
+    metadata_count: u32,
+    scratch: Vec<u8>,
+}
+
+impl Sink {
+    pub(crate) fn create(
+        path: &Path,
+        chunk_size: u64,
+        zstd_level: i32,
+    ) -> Result<Self, RecordingError> {
+        let file = File::create(path).map_err(io_error(path, "creating"))?;
+        let compressor = zstd::bulk::Compressor::new(zstd_level)
+            .map_err(io_error(path, "setting up zstd compression"))?;
+        let chunk_size = usize::try_from(chunk_size.clamp(1, 1 << 30)).unwrap_or(1 << 20);
+        let mut sink = Self {
+            out: Out {
+                path: path.to_path_buf(),
+                file: BufWriter::with_capacity(1 << 16, file),
+                pos: 0,
+                crc: crc32fast::Hasher::new(),
+            },
+            chunk_size,
+            compressor,
+            chunk: Vec::with_capacity(chunk_size + 4096),
+            compressed: Vec::new(),
+            chunk_start_time: u64::MAX,
+            chunk_end_time: 0,
+            touched: Vec::new(),
+            channels: Vec::new(),
+            slot_of_id: HashMap::new(),
+            schema_records: Vec::new(),
+            channel_records: Vec::new(),
+            chunk_index_records: Vec::new(),
+            attachment_index_records: Vec::new(),
+            metadata_index_records: Vec::new(),
+            schemas: Vec::new(),
+            message_count: 0,
+            message_start_time: u64::MAX,
+            message_end_time: 0,
+            chunk_count: 0,
+            attachment_count: 0,
+            metadata_count: 0,
+            scratch: Vec::new(),
+        };
+        sink.out.emit(MAGIC)?;
+        let mut b = Vec::new();
+        let at = begin_record(&mut b, op::HEADER);
+        put_str(&mut b, ""); // profile: none of the well-known ones
+        put_str(
+            &mut b,
+            concat!("gyrolab gyro-mcap ", env!("CARGO_PKG_VERSION")),
+        );
+        end_record(&mut b, at);
+        sink.out.emit(&b)?;
+        Ok(sink)
+    }
+
+    pub(crate) fn path(&self) -> &Path {
+        &self.out.path
+    }
+
+    pub(crate) fn message_count(&self) -> u64 {
+        self.message_count
+    }
+
+    /// Adds a schema (or returns the id of an identical one). Ids start at 1.
+    pub(crate) fn add_schema(
+        &mut self,
+        name: &str,
+        encoding: &str,
+        data: &[u8],
+    ) -> Result<u16, RecordingError> {
+        if let Some(i) = self
+            .schemas
+            .iter()
+            .position(|(n, e, d)| n == name && e == encoding && d == data)
+        {
+            return Ok(i as u16 + 1);
+        }
+        let id = u16::try_from(self.schemas.len() + 1)
+            .map_err(|_| self.usage("add schema", "at most 65535 schemas"))?;
+        if data.len() > u32::MAX as usize {
+            return Err(self.usage("add schema", "schema data below 4 GiB"));
+        }
+        let mut b = Vec::new();
+        let at = begin_record(&mut b, op::SCHEMA);
+        put_u16(&mut b, id);
+        put_str(&mut b, name);
+        put_str(&mut b, encoding);
+        put_bytes32(&mut b, data);
+        end_record(&mut b, at);
+        self.out.emit(&b)?;
+        self.schema_records.extend_from_slice(&b);
+        self.schemas
+            .push((name.to_owned(), encoding.to_owned(), data.to_vec()));
+        Ok(id)
+    }
+
+    /// Adds a channel with a given id; returns its slot.
+    pub(crate) fn add_channel(
+        &mut self,
+        id: u16,
+        schema_id: u16,
+        topic: &str,
+        message_encoding: &str,
+        metadata: &BTreeMap<String, String>,
+    ) -> Result<usize, RecordingError> {
+        if self.slot_of_id.contains_key(&id) {
+            return Err(self.usage("add channel", format!("a new channel id, {id} is taken")));
+        }
+        let mut b = Vec::new();
+        let at = begin_record(&mut b, op::CHANNEL);
+        put_u16(&mut b, id);
+        put_u16(&mut b, schema_id);
+        put_str(&mut b, topic);
+        put_str(&mut b, message_encoding);
+        put_str_map(&mut b, metadata);
+        end_record(&mut b, at);
+        self.out.emit(&b)?;
+        self.channel_records.extend_from_slice(&b);
+        let slot = self.channels.len();
+        self.channels.push(SinkChannel {
+            id,
+            topic: topic.to_owned(),
+            sequence: 0,
+            message_count: 0,
+            chunk_index: Vec::new(),
+        });
+        self.slot_of_id.insert(id, slot);
+        Ok(slot)
+    }
+
+    pub(crate) fn slot_of(&self, id: u16) -> Option<usize> {
+        self.slot_of_id.get(&id).copied()
+    }
+
+    pub(crate) fn topic(&self, slot: usize) -> &str {
+        self.channels.get(slot).map_or("", |c| c.topic.as_str())
+    }
+
+    fn usage(&self, call: impl Into<String>, expected: impl Into<String>) -> RecordingError {
+        RecordingError::Usage {
+            path: self.out.path.clone(),
+            call: call.into(),
+            expected: expected.into(),
+        }
+    }
+
+    /// Appends a message record's header to the open chunk and indexes it; the caller appends
+    /// exactly `data_len` payload bytes to the returned buffer next.
+    #[inline]
+    pub(crate) fn begin_message(
+        &mut self,
+        slot: usize,
+        sequence: Option<u32>,
+        log_time: u64,
+        publish_time: u64,
+        data_len: usize,
+    ) -> &mut Vec<u8> {
+        let ch = &mut self.channels[slot];
+        let offset = self.chunk.len() as u64;
+        if ch.chunk_index.is_empty() {
+            self.touched.push(slot);
+        }
+        ch.chunk_index.push((log_time, offset));
+        let seq = sequence.unwrap_or(ch.sequence);
+        ch.sequence = seq.wrapping_add(1);
+        ch.message_count += 1;
+        self.message_count += 1;
+        self.chunk_start_time = self.chunk_start_time.min(log_time);
+        self.chunk_end_time = self.chunk_end_time.max(log_time);
+        let mut head = [0u8; 1 + 8 + 2 + 4 + 8 + 8];
+        head[0] = op::MESSAGE;
+        head[1..9].copy_from_slice(&((2 + 4 + 8 + 8 + data_len) as u64).to_le_bytes());
+        head[9..11].copy_from_slice(&ch.id.to_le_bytes());
+        head[11..15].copy_from_slice(&seq.to_le_bytes());
+        head[15..23].copy_from_slice(&log_time.to_le_bytes());
+        head[23..31].copy_from_slice(&publish_time.to_le_bytes());
+        self.chunk.reserve(head.len() + data_len);
+        self.chunk.extend_from_slice(&head);
+        &mut self.chunk
+    }
+
+    pub(crate) fn chunk_is_full(&self) -> bool {
+        self.chunk.len() >= self.chunk_size
+    }
+
+    /// Compresses and writes the open chunk with its message indexes, then hands the bytes to the
+    /// operating system (so they survive the process being killed).
+    pub(crate) fn flush_chunk(&mut self) -> Result<(), RecordingError> {
+        if self.chunk.is_empty() {
+            return Ok(());
+        }
+        let uncompressed_crc = crc32fast::hash(&self.chunk);
+        self.compressed.clear();
+        self.compressed
+            .reserve(zstd::zstd_safe::compress_bound(self.chunk.len()));
+        self.compressor
+            .compress_to_buffer(&self.chunk, &mut self.compressed)
+            .map_err(io_error(&self.out.path, "compressing a chunk"))?;
+        let chunk_start = self.out.pos;
+        let mut head = Vec::with_capacity(64);
+        head.push(op::CHUNK);
+        let body_len = 8 + 8 + 8 + 4 + (4 + 4) + 8 + self.compressed.len();
+        put_u64(&mut head, body_len as u64);
+        put_u64(&mut head, self.chunk_start_time);
+        put_u64(&mut head, self.chunk_end_time);
+        put_u64(&mut head, self.chunk.len() as u64);
+        put_u32(&mut head, uncompressed_crc);
+        put_str(&mut head, "zstd");
+        put_u64(&mut head, self.compressed.len() as u64);
+        self.out.emit(&head)?;
+        self.out.emit(&self.compressed)?;
+        let chunk_length = self.out.pos - chunk_start;
+
+        // Message indexes, one per channel in this chunk.
+        let index_start = self.out.pos;
+        let mut offsets = Vec::with_capacity(self.touched.len());
+        self.scratch.clear();
+        for &slot in &self.touched {
+            let ch = &mut self.channels[slot];
+            offsets.push((ch.id, index_start + self.scratch.len() as u64));
+            self.scratch.push(op::MESSAGE_INDEX);
+            put_u64(
+                &mut self.scratch,
+                (2 + 4 + 16 * ch.chunk_index.len()) as u64,
+            );
+            put_u16(&mut self.scratch, ch.id);
+            put_u32(&mut self.scratch, len32(16 * ch.chunk_index.len()));
+            for &(t, o) in &ch.chunk_index {
+                put_u64(&mut self.scratch, t);
+                put_u64(&mut self.scratch, o);
+            }
+            ch.chunk_index.clear();
+        }
+        self.touched.clear();
+        self.out.emit(&self.scratch)?;
+        let index_length = self.scratch.len() as u64;
+
+        let b = &mut self.chunk_index_records;
+        let at = begin_record(b, op::CHUNK_INDEX);
+        put_u64(b, self.chunk_start_time);
+        put_u64(b, self.chunk_end_time);
+        put_u64(b, chunk_start);
+        put_u64(b, chunk_length);
+        put_u32(b, len32(offsets.len() * 10));
+        for (id, o) in offsets {
+            put_u16(b, id);
+            put_u64(b, o);
+        }
+        put_u64(b, index_length);
+        put_str(b, "zstd");
+        put_u64(b, self.compressed.len() as u64);
+        put_u64(b, self.chunk.len() as u64);
+        end_record(b, at);
+
+        self.message_start_time = self.message_start_time.min(self.chunk_start_time);
+        self.message_end_time = self.message_end_time.max(self.chunk_end_time);
+        self.chunk_count += 1;
+        self.chunk.clear();
+        self.chunk_start_time = u64::MAX;
+        self.chunk_end_time = 0;
+        self.out
+            .file
+            .flush()
+            .map_err(io_error(&self.out.path, "flushing a chunk"))
+    }
+
+    pub(crate) fn write_metadata(
+        &mut self,
+        name: &str,
+        entries: &BTreeMap<String, String>,
+    ) -> Result<(), RecordingError> {
+        let mut b = Vec::new();
+        let at = begin_record(&mut b, op::METADATA);
+        put_str(&mut b, name);
+        put_str_map(&mut b, entries);
+        end_record(&mut b, at);
+        let offset = self.out.pos;
+        self.out.emit(&b)?;
+        let ix = &mut self.metadata_index_records;
+        let at = begin_record(ix, op::METADATA_INDEX);
+        put_u64(ix, offset);
+        put_u64(ix, b.len() as u64);
+        put_str(ix, name);
+        end_record(ix, at);
+        self.metadata_count += 1;
+        Ok(())
+    }
+
+    pub(crate) fn attach(
+        &mut self,
+        name: &str,
+        media_type: &str,
+        log_time: u64,
+        create_time: u64,
+        data: &[u8],
+    ) -> Result<(), RecordingError> {
+        let mut b = Vec::with_capacity(data.len() + 64 + name.len() + media_type.len());
+        let at = begin_record(&mut b, op::ATTACHMENT);
+        put_u64(&mut b, log_time);
+        put_u64(&mut b, create_time);
+        put_str(&mut b, name);
+        put_str(&mut b, media_type);
+        put_u64(&mut b, data.len() as u64);
+        b.extend_from_slice(data);
+        let crc = crc32fast::hash(&b[at + 8..]);
+        put_u32(&mut b, crc);
+        end_record(&mut b, at);
+        let offset = self.out.pos;
+        self.out.emit(&b)?;
+        let ix = &mut self.attachment_index_records;
+        let at = begin_record(ix, op::ATTACHMENT_INDEX);
+        put_u64(ix, offset);
+        put_u64(ix, b.len() as u64);
+        put_u64(ix, log_time);
+        put_u64(ix, create_time);
+        put_u64(ix, data.len() as u64);
+        put_str(ix, name);
+        put_str(ix, media_type);
+        end_record(ix, at);
+        self.attachment_count += 1;
+        Ok(())
+    }
+
+    /// Writes the last chunk, DataEnd, the summary section with its offsets, the footer and the
+    /// closing magic; syncs the file to disk. Returns the file size.
+    pub(crate) fn finish(&mut self) -> Result<u64, RecordingError> {
+        self.flush_chunk()?;
+        let data_crc = self.out.crc.clone().finalize();
+        let mut b = Vec::new();
+        let at = begin_record(&mut b, op::DATA_END);
+        put_u32(&mut b, data_crc);
+        end_record(&mut b, at);
+        self.out.emit(&b)?;
+        // The summary CRC covers the summary section and the footer up to its CRC field.
+        self.out.crc = crc32fast::Hasher::new();
+
+        // Summary: each group, remembering where it went for the summary offsets.
+        let summary_start = self.out.pos;
+        let mut statistics = Vec::new();
+        let at = begin_record(&mut statistics, op::STATISTICS);
+        put_u64(&mut statistics, self.message_count);
+        put_u16(&mut statistics, self.schemas.len() as u16);
+        put_u32(&mut statistics, self.channels.len() as u32);
+        put_u32(&mut statistics, self.attachment_count);
+        put_u32(&mut statistics, self.metadata_count);
+        put_u32(&mut statistics, self.chunk_count);
+        let (start, end) = if self.message_count == 0 {
+            (0, 0)
+        } else {
+            (self.message_start_time, self.message_end_time)
+        };
+        put_u64(&mut statistics, start);
+        put_u64(&mut statistics, end);
+        let map_at = statistics.len();
+        put_u32(&mut statistics, 0);
+        for ch in &self.channels {
+            put_u16(&mut statistics, ch.id);
+            put_u64(&mut statistics, ch.message_count);
+        }
+        let map_len = statistics.len() - map_at - 4;
+        patch_u32(&mut statistics, map_at, map_len);
+        end_record(&mut statistics, at);
+
+        let groups = [
+            (op::SCHEMA, std::mem::take(&mut self.schema_records)),
+            (op::CHANNEL, std::mem::take(&mut self.channel_records)),
+            (op::STATISTICS, statistics),
+            (
+                op::CHUNK_INDEX,
+                std::mem::take(&mut self.chunk_index_records),
+            ),
+            (
+                op::ATTACHMENT_INDEX,
+                std::mem::take(&mut self.attachment_index_records),
+            ),
+            (
+                op::METADATA_INDEX,
+                std::mem::take(&mut self.metadata_index_records),
+            ),
+        ];
+        let mut offsets = Vec::new();
+        for (opcode, bytes) in &groups {
+            if bytes.is_empty() {
+                continue;
+            }
+            let at = begin_record(&mut offsets, op::SUMMARY_OFFSET);
+            offsets.push(*opcode);
+            put_u64(&mut offsets, self.out.pos);
+            put_u64(&mut offsets, bytes.len() as u64);
+            end_record(&mut offsets, at);
+            self.out.emit(bytes)?;
+        }
+        let summary_offset_start = self.out.pos;
+        self.out.emit(&offsets)?;
+        let mut footer = Vec::new();
+        footer.push(op::FOOTER);
+        put_u64(&mut footer, 8 + 8 + 4);
+        put_u64(&mut footer, summary_start);
+        put_u64(&mut footer, summary_offset_start);
+        self.out.emit(&footer)?;
+        let summary_crc = self.out.crc.clone().finalize();
+        self.out.emit(&summary_crc.to_le_bytes())?;
+        self.out.emit(MAGIC)?;
+        self.out
+            .file
+            .flush()
+            .map_err(io_error(&self.out.path, "flushing"))?;
+        self.out
+            .file
+            .get_ref()
+            .sync_all()
+            .map_err(io_error(&self.out.path, "syncing to disk"))?;
+        Ok(self.out.pos)
+    }
+}
+
+/// How a channel's messages are encoded, fixed when it is added.
+enum ChannelKind {
+    Record {
+        kinds: Vec<FieldKind>,
+        tags: Vec<Tag>,
+        /// Encoded length when every field is F64 (the fast path), else None.
+        all_f64_len: Option<usize>,
+    },
+    Pose,
+}
+
+/// Writes one recording: `<final_path>.partial` while running, renamed to `final_path` by
+/// [`finish`](Self::finish). Dropping it without `finish` closes the open chunk (best effort) and
+/// leaves the `.partial` file for [`crate::recover`].
+pub struct RecordingWriter {
+    sink: Sink,
+    final_path: PathBuf,
+    kinds: Vec<ChannelKind>,
+    flush_interval_s: f64,
+    last_flush: Instant,
+    since_clock_check: u32,
+    finished: bool,
+}
+
+/// How many messages between two looks at the clock (a look costs ~20 ns).
+const CLOCK_CHECK_EVERY: u32 = 256;
+
+impl RecordingWriter {
+    /// Opens `<final_path>.partial` for writing; `finish` renames it to `final_path`.
+    pub fn create(final_path: &Path, opts: WriterOptions) -> Result<Self, RecordingError> {
+        let partial = partial_path(final_path);
+        let sink = Sink::create(&partial, opts.chunk_size_bytes, opts.zstd_level)?;
+        Ok(Self {
+            sink,
+            final_path: final_path.to_path_buf(),
+            kinds: Vec::new(),
+            flush_interval_s: if opts.flush_interval_s.is_finite() {
+                opts.flush_interval_s.max(0.0)
+            } else {
+                1.0
+            },
+            last_flush: Instant::now(),
+            since_clock_check: 0,
+            finished: false,
+        })
+    }
+
+    /// The `.partial` path being written.
+    pub fn partial_path(&self) -> &Path {
+        self.sink.path()
+    }
+
+    fn next_channel_id(&self, topic: &str) -> Result<u16, RecordingError> {
+        if (0..self.kinds.len()).any(|slot| self.sink.topic(slot) == topic) {
+            return Err(self.usage(
+                format!("adding channel {topic:?}"),
+                "a topic not used by another channel",
+            ));
+        }
+        u16::try_from(self.kinds.len() + 1).map_err(|_| {
+            self.usage(
+                format!("adding channel {topic:?}"),
+                "at most 65535 channels",
+            )
+        })
+    }
+
+    /// A channel of flat records (see [`RecordSchema`]); the schema is the record's proto3
+    /// FileDescriptorSet; field units go to the channel metadata as `unit.<field>`.
+    pub fn add_record_channel(
+        &mut self,
+        topic: &str,
+        schema: &RecordSchema,
+    ) -> Result<ChannelId, RecordingError> {
+        schema
+            .validate()
+            .map_err(|e| self.usage(format!("adding channel {topic:?}"), e))?;
+        let id = self.next_channel_id(topic)?;
+        let schema_id =
+            self.sink
+                .add_schema(&schema.full_name, "protobuf", &schema.file_descriptor_set())?;
+        let metadata: BTreeMap<String, String> = schema
+            .fields
+            .iter()
+            .filter_map(|f| Some((format!("unit.{}", f.name), f.unit.clone()?)))
+            .collect();
+        let slot = self
+            .sink
+            .add_channel(id, schema_id, topic, "protobuf", &metadata)?;
+        let kinds: Vec<FieldKind> = schema.fields.iter().map(|f| f.kind).collect();
+        let tags = kinds
+            .iter()
+            .enumerate()
+            .map(|(i, k)| {
+                let wire = match k {
+                    FieldKind::F64 => WIRE_FIXED64,
+                    FieldKind::U64 => WIRE_VARINT,
+                    FieldKind::Str => WIRE_LEN,
+                };
+                Tag::new(i as u32 + 1, wire)
+            })
+            .collect::<Vec<_>>();
+        let all_f64_len = kinds
+            .iter()
+            .all(|k| *k == FieldKind::F64)
+            .then(|| tags.iter().map(|t| t.len() + 8).sum());
+        self.kinds.push(ChannelKind::Record {
+            kinds,
+            tags,
+            all_f64_len,
+        });
+        Ok(ChannelId(slot as u32))
+    }
+
+    /// A channel of `foxglove.FrameTransform` poses (protobuf; the schema is its FileDescriptorSet).
+    pub fn add_pose_channel(&mut self, topic: &str) -> Result<ChannelId, RecordingError> {
+        let id = self.next_channel_id(topic)?;
+        let schema_id = self
+            .sink
+            .add_schema(POSE_SCHEMA_NAME, "protobuf", FRAME_TRANSFORM_FDS)?;
+        let slot = self
+            .sink
+            .add_channel(id, schema_id, topic, "protobuf", &BTreeMap::new())?;
+        self.kinds.push(ChannelKind::Pose);
+        Ok(ChannelId(slot as u32))
+    }
+
+    fn usage(&self, call: impl Into<String>, expected: impl Into<String>) -> RecordingError {
+        RecordingError::Usage {
+            path: self.sink.path().to_path_buf(),
+            call: call.into(),
+            expected: expected.into(),
+        }
+    }
+
+    fn channel(&self, ch: ChannelId, call: &str) -> Result<&ChannelKind, RecordingError> {
+        self.kinds
+            .get(ch.0 as usize)
+            .ok_or_else(|| self.usage(call, "a channel id returned by this writer"))
+    }
+
+    /// Fast path: every field of the channel is F64; `values` in schema order.
+    pub fn write_f64_record(
+        &mut self,
+        ch: ChannelId,
+        log_time_ns: u64,
+        values: &[f64],
+    ) -> Result<(), RecordingError> {
+        let slot = ch.0 as usize;
+        let (tags, len) = match self.kinds.get(slot) {
+            Some(ChannelKind::Record {
+                tags,
+                all_f64_len: Some(len),
+                ..
+            }) if tags.len() == values.len() => (tags, *len),
+            _ => return Err(self.f64_misuse(ch, values.len())),
+        };
+        let buf = self
+            .sink
+            .begin_message(slot, None, log_time_ns, log_time_ns, len);
+        for (tag, v) in tags.iter().zip(values) {
+            buf.extend_from_slice(tag.as_slice());
+            buf.extend_from_slice(&v.to_le_bytes());
+        }
+        self.after_message()
+    }
+
+    #[cold]
+    fn f64_misuse(&self, ch: ChannelId, n: usize) -> RecordingError {
+        let topic = self.sink.topic(ch.0 as usize).to_owned();
+        let call = format!("write_f64_record on {topic:?}");
+        match self.kinds.get(ch.0 as usize) {
+            None => self.usage(call, "a channel id returned by this writer"),
+            Some(ChannelKind::Pose) => self.usage(call, "a record channel, found a pose channel"),
+            Some(ChannelKind::Record {
+                all_f64_len: None, ..
+            }) => self.usage(
+                call,
+                "a channel whose fields are all F64 (use write_record)",
+            ),
+            Some(ChannelKind::Record { tags, .. }) => {
+                self.usage(call, format!("{} values, found {n}", tags.len()))
+            }
+        }
+    }
+
+    /// Any record: `values` in schema order, each of its field's kind.
+    pub fn write_record(
+        &mut self,
+        ch: ChannelId,
+        log_time_ns: u64,
+        values: &[Value],
+    ) -> Result<(), RecordingError> {
+        let slot = ch.0 as usize;
+        let call = "write_record";
+        let Some(ChannelKind::Record { kinds, tags, .. }) = self.kinds.get(slot) else {
+            let what = if self.kinds.get(slot).is_some() {
+                "a record channel, found a pose channel"
+            } else {
+                "a channel id returned by this writer"
+            };
+            return Err(self.usage(call, what));
+        };
+        if kinds.len() != values.len() {
+            let topic = self.sink.topic(slot);
+            return Err(self.usage(
+                format!("write_record on {topic:?}"),
+                format!("{} values, found {}", kinds.len(), values.len()),
+            ));
+        }
+        let mut len = 0usize;
+        for (i, (kind, v)) in kinds.iter().zip(values).enumerate() {
+            len += tags[i].len()
+                + match (kind, v) {
+                    (FieldKind::F64, Value::F64(_)) => 8,
+                    (FieldKind::U64, Value::U64(x)) => varint_len(*x),
+                    (FieldKind::Str, Value::Str(s)) => varint_len(s.len() as u64) + s.len(),
+                    _ => {
+                        let topic = self.sink.topic(slot);
+                        return Err(self.usage(
+                            format!("write_record on {topic:?}"),
+                            format!("value {i} of kind {kind:?}, found {v:?}"),
+                        ));
+                    }
+                };
+        }
+        let buf = self
+            .sink
+            .begin_message(slot, None, log_time_ns, log_time_ns, len);
+        for (tag, v) in tags.iter().zip(values) {
+            buf.extend_from_slice(tag.as_slice());
+            match v {
+                Value::F64(x) => buf.extend_from_slice(&x.to_le_bytes()),
+                Value::U64(x) => put_varint(buf, *x),
+                Value::Str(s) => {
+                    put_varint(buf, s.len() as u64);
+                    buf.extend_from_slice(s.as_bytes());
+                }
+            }
+        }
+        self.after_message()
+    }
+
+    /// One pose on a pose channel; its `timestamp` field is `log_time_ns`.
+    pub fn write_pose(
+        &mut self,
+        ch: ChannelId,
+        log_time_ns: u64,
+        pose: &Pose,
+    ) -> Result<(), RecordingError> {
+        let slot = ch.0 as usize;
+        if !matches!(self.channel(ch, "write_pose")?, ChannelKind::Pose) {
+            let topic = self.sink.topic(slot);
+            return Err(self.usage(
+                format!("write_pose on {topic:?}"),
+                "a pose channel, found a record channel",
+            ));
+        }
+        let len = pose_encoded_len(log_time_ns, pose);
+        let buf = self
+            .sink
+            .begin_message(slot, None, log_time_ns, log_time_ns, len);
+        encode_pose(buf, log_time_ns, pose);
+        self.after_message()
+    }
+
+    #[inline]
+    fn after_message(&mut self) -> Result<(), RecordingError> {
+        if self.sink.chunk_is_full() {
+            return self.flush_chunk();
+        }
+        self.since_clock_check += 1;
+        if self.since_clock_check >= CLOCK_CHECK_EVERY {
+            self.since_clock_check = 0;
+            if self.last_flush.elapsed().as_secs_f64() >= self.flush_interval_s {
+                return self.flush_chunk();
+            }
+        }
+        Ok(())
+    }
+
+    /// Closes the open chunk now and hands it to the operating system (the writer also does this
+    /// by itself when a chunk is full or `flush_interval_s` has passed).
+    pub fn flush_chunk(&mut self) -> Result<(), RecordingError> {
+        self.last_flush = Instant::now();
+        self.since_clock_check = 0;
+        self.sink.flush_chunk()
+    }
+
+    /// A named metadata record (e.g. "scene" → its TOML text and settings).
+    pub fn write_metadata(
+        &mut self,
+        name: &str,
+        entries: &BTreeMap<String, String>,
+    ) -> Result<(), RecordingError> {
+        self.sink.write_metadata(name, entries)
+    }
+
+    /// An attachment (e.g. the scene file). Its create time is recorded as 0.
+    pub fn attach(
+        &mut self,
+        name: &str,
+        media_type: &str,
+        log_time_ns: u64,
+        data: &[u8],
+    ) -> Result<(), RecordingError> {
+        self.sink.attach(name, media_type, log_time_ns, 0, data)
+    }
+
+    /// Writes the summary and indexes, syncs, and renames `.partial` to the final path. Callable at
+    /// any point of a run (e.g. after Ctrl-C).
+    pub fn finish(mut self) -> Result<WriteSummary, RecordingError> {
+        self.finished = true;
+        let bytes = self.sink.finish()?;
+        let partial = self.sink.path().to_path_buf();
+        std::fs::rename(&partial, &self.final_path)
+            .map_err(io_error(&partial, "renaming to the final name"))?;
+        if let Some(dir) = self.final_path.parent() {
+            // Make the rename durable where the platform allows opening a directory.
+            if let Ok(d) = File::open(if dir.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                dir
+            }) {
+                let _ = d.sync_all();
+            }
+        }
+        Ok(WriteSummary {
+            path: self.final_path.clone(),
+            bytes,
+            messages: self.sink.message_count(),
+        })
+    }
+}
+
+impl Drop for RecordingWriter {
+    fn drop(&mut self) {
+        if !self.finished {
+            // Best effort: keep what was written so far for `recover`.
+            let _ = self.sink.flush_chunk();
+        }
+    }
+}
+
+/// `<path>.partial`.
+pub fn partial_path(final_path: &Path) -> PathBuf {
+    let mut s = final_path.as_os_str().to_owned();
+    s.push(".partial");
+    PathBuf::from(s)
+}
+
+impl Sink {
+    /// Re-emits a raw message (used by `recover`).
+    pub(crate) fn write_raw(
+        &mut self,
+        slot: usize,
+        sequence: u32,
+        log_time: u64,
+        publish_time: u64,
+        data: &[u8],
+    ) -> Result<(), RecordingError> {
+        let buf = self.begin_message(slot, Some(sequence), log_time, publish_time, data.len());
+        buf.extend_from_slice(data);
+        if self.chunk_is_full() {
+            self.flush_chunk()?;
+        }
+        Ok(())
+    }
+}
