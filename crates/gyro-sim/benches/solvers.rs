@@ -46,6 +46,22 @@ fn bench_solvers(c: &mut Criterion) {
         Method::Rk4 { step_s: 2e-3 },
         Method::Rodas4,
     ] {
+        // Work counters once per method, so a timing change can be told from a work change.
+        let mut x = [1.0, 0.0];
+        if let Ok((_, stats)) =
+            integrate(&mut Pendulum, method, &tol, &mut x, &grid, &[], |_, _| {
+                ControlFlow::Continue(())
+            })
+        {
+            eprintln!(
+                "{method}: {} steps, {} rejected, {} rhs, {} jacobians, {} LU",
+                stats.steps,
+                stats.rejected_steps,
+                stats.rhs_evals,
+                stats.jacobian_evals,
+                stats.lu_decompositions
+            );
+        }
         group.bench_function(method.to_string(), |b| {
             b.iter(|| {
                 let mut x = [1.0, 0.0];

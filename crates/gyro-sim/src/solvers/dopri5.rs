@@ -66,7 +66,7 @@ impl Dopri5 {
             x_new: vec![0.0; n],
             err: vec![0.0; n],
             dense5: vec![0.0; n],
-            control: PiController::new(5.0, 0.04, 0.2, 10.0),
+            control: PiController::new(0.2 - 0.75 * 0.04, 0.04, 0.2, 10.0),
             scratch: InitialStepScratch::new(n),
         }
     }

@@ -673,8 +673,9 @@ pub(crate) fn initial_step<S: OdeSystem>(
 }
 
 /// Hairer's PI step-size controller of DOPRI5/DOP853 (HNW I, IV.2): h_new = h / fac with
-/// fac = err^(expo1) / err_prev^beta / safe, clamped so that h_new is in
-/// [h * fac_min, h * fac_max]; no growth right after a rejection.
+/// fac = err^expo1 / err_prev^beta / safe, clamped so that h_new is in
+/// [h * fac_min, h * fac_max]; no growth right after a rejection. DOPRI5 uses
+/// expo1 = 1/5 - 0.75 beta, DOP853 expo1 = 1/8 - 0.2 beta.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct PiController {
     expo1: f64,
@@ -689,9 +690,9 @@ pub(crate) struct PiController {
 }
 
 impl PiController {
-    pub(crate) fn new(order: f64, beta: f64, fac_min: f64, fac_max: f64) -> Self {
+    pub(crate) fn new(expo1: f64, beta: f64, fac_min: f64, fac_max: f64) -> Self {
         PiController {
-            expo1: 1.0 / order - 0.75 * beta,
+            expo1,
             beta,
             fac_min,
             fac_max,
