@@ -514,14 +514,14 @@ fn stiff_oscillatory_rodas4_steps_over_fast_mode() {
             late_steps,
             rodas.max_err,
         );
-        if use_jacobian {
-            assert!(
-                late_steps < 200,
-                "rodas4 mean step after the transient {} s",
-                1000.0 / late_steps as f64
-            );
-            assert!(dopri.stats.steps > 1000 * late_steps);
-        }
+        // Mean step after the transient: > 5 s with the exact Jacobian, > 1 s with differences.
+        let max_late_steps = if use_jacobian { 200 } else { 1000 };
+        assert!(
+            late_steps < max_late_steps,
+            "rodas4 mean step after the transient {} s",
+            1000.0 / late_steps as f64
+        );
+        assert!(dopri.stats.steps > 800 * late_steps);
         assert!(
             rodas.stats.steps * 10 < dopri.stats.steps,
             "rodas4 {} steps vs dopri5 {}",
