@@ -1,0 +1,106 @@
+//! Throughput of the recording contract on a realistic load: a 20-field f64 record channel and
+//! a 6-frame pose channel at 10 Hz for a simulated 24 h (864 000 records + 5 184 000 poses).
+//! `cargo bench -p gyro-mcap --bench throughput` (set GYRO_MCAP_BENCH_HOURS to change the length).
+
+use std::time::Instant;
+
+use gyro_mcap::{FieldSpec, Pose, RecordSchema, Recording, RecordingWriter, WriterOptions};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let hours: f64 = std::env::var("GYRO_MCAP_BENCH_HOURS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(24.0);
+    let steps = (hours * 3600.0 * 10.0) as u64;
+    let dir = std::env::temp_dir().join("gyro-mcap-bench");
+    std::fs::create_dir_all(&dir)?;
+    let path = dir.join("day.mcap");
+
+    let schema = RecordSchema {
+        full_name: "gyrolab.CompassState".into(),
+        fields: (0..20).map(|i| FieldSpec::f64(&format!("q{i}"), "rad")).collect(),
+    };
+    let frames = ["earth", "ship", "gimbal", "spider", "case", "rotor", "spin"];
+    let mut poses: Vec<Pose> = frames
+        .windows(2)
+        .map(|w| Pose {
+            parent_frame: w[0].into(),
+            child_frame: w[1].into(),
+            translation_m: [0.0; 3],
+            rotation_xyzw: [0.0, 0.0, 0.0, 1.0],
+        })
+        .collect();
+
+    let mut opts = WriterOptions::default();
+    if let Some(level) = std::env::var("GYRO_MCAP_BENCH_ZSTD_LEVEL").ok().and_then(|s| s.parse().ok()) {
+        opts.zstd_level = level;
+    }
+    // Signals advance by rotating phasors (a few flops), so the loop measures the writer, not sin().
+    let mut phasors: Vec<[f64; 4]> = (0..20 + poses.len())
+        .map(|k| {
+            let w = 1e-4 * (k as f64 + 1.0);
+            [1.0, 0.0, w.cos(), w.sin()]
+        })
+        .collect();
+    let started = Instant::now();
+    let mut w = RecordingWriter::create(&path, opts)?;
+    let rec_ch = w.add_record_channel("/compass", &schema)?;
+    let pose_ch = w.add_pose_channel("/poses")?;
+    let mut values = [0.0f64; 20];
+    let mut payload_bytes = 0u64;
+    for i in 0..steps {
+        let t_ns = i * 100_000_000;
+        for p in phasors.iter_mut() {
+            let [c, s, cw, sw] = *p;
+            *p = [c * cw - s * sw, s * cw + c * sw, cw, sw];
+        }
+        for (k, v) in values.iter_mut().enumerate() {
+            *v = phasors[k][1] * 1e-2 + k as f64;
+        }
+        w.write_f64_record(rec_ch, t_ns, &values)?;
+        payload_bytes += 20 * 9;
+        for (k, p) in poses.iter_mut().enumerate() {
+            let [c, s, _, _] = phasors[20 + k];
+            p.translation_m = [0.1 * k as f64, 0.0, 0.05 * s];
+            p.rotation_xyzw = [0.0, 0.0, s, c];
+            w.write_pose(pose_ch, t_ns, p)?;
+            payload_bytes += 110;
+        }
+    }
+    let summary = w.finish()?;
+    let write_s = started.elapsed().as_secs_f64();
+    let messages = summary.messages as f64;
+    println!("simulated: {hours} h at 10 Hz, {} messages", summary.messages);
+    println!(
+        "write: {:.2} s, {:.2} M msgs/s, {:.0} MB/s of payload, {:.0} MB/s to disk",
+        write_s,
+        messages / write_s / 1e6,
+        payload_bytes as f64 / write_s / 1e6,
+        summary.bytes as f64 / write_s / 1e6
+    );
+    println!(
+        "file: {:.1} MB, {:.2} MB per simulated hour ({:.1} bytes/message)",
+        summary.bytes as f64 / 1e6,
+        summary.bytes as f64 / 1e6 / hours,
+        summary.bytes as f64 / messages
+    );
+
+    let started = Instant::now();
+    let rec = Recording::open(&path)?;
+    let open_s = started.elapsed().as_secs_f64();
+    let records = rec.read_records("/compass")?;
+    let records_s = started.elapsed().as_secs_f64() - open_s;
+    let poses_table = rec.read_poses("/poses")?;
+    let read_s = started.elapsed().as_secs_f64();
+    assert_eq!(records.len() + poses_table.len(), summary.messages as usize);
+    println!(
+        "read: {:.2} s ({:.2} M msgs/s; open {:.3} s, records {:.2} M msgs/s, poses {:.2} M msgs/s)",
+        read_s,
+        messages / read_s / 1e6,
+        open_s,
+        records.len() as f64 / records_s / 1e6,
+        poses_table.len() as f64 / (read_s - open_s - records_s) / 1e6
+    );
+    std::fs::remove_file(&path)?;
+    Ok(())
+}
