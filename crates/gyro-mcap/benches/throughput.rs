@@ -6,6 +6,25 @@ use std::time::Instant;
 
 use gyro_mcap::{FieldSpec, Pose, RecordSchema, Recording, RecordingWriter, WriterOptions};
 
+/// CPU seconds (user + system) this process has used, from /proc (0 where unavailable): on a
+/// shared machine, rates per CPU second say more than rates per wall second.
+fn cpu_s() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let fields: Vec<&str> = stat
+        .rsplit_once(')')
+        .map_or("", |(_, rest)| rest)
+        .split_whitespace()
+        .collect();
+    let ticks = |i: usize| {
+        fields
+            .get(i)
+            .and_then(|f| f.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    };
+    // utime and stime are fields 14 and 15 of stat(5); 11 and 12 after the command name.
+    (ticks(11) + ticks(12)) / 100.0
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let hours: f64 = std::env::var("GYRO_MCAP_BENCH_HOURS")
         .ok()
@@ -18,7 +37,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let schema = RecordSchema {
         full_name: "gyrolab.CompassState".into(),
-        fields: (0..20).map(|i| FieldSpec::f64(&format!("q{i}"), "rad")).collect(),
+        fields: (0..20)
+            .map(|i| FieldSpec::f64(&format!("q{i}"), "rad"))
+            .collect(),
     };
     let frames = ["earth", "ship", "gimbal", "spider", "case", "rotor", "spin"];
     let mut poses: Vec<Pose> = frames
@@ -32,7 +53,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
 
     let mut opts = WriterOptions::default();
-    if let Some(level) = std::env::var("GYRO_MCAP_BENCH_ZSTD_LEVEL").ok().and_then(|s| s.parse().ok()) {
+    if let Some(level) = std::env::var("GYRO_MCAP_BENCH_ZSTD_LEVEL")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
         opts.zstd_level = level;
     }
     // Signals advance by rotating phasors (a few flops), so the loop measures the writer, not sin().
@@ -43,6 +67,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         })
         .collect();
     let started = Instant::now();
+    let cpu0 = cpu_s();
     let mut w = RecordingWriter::create(&path, opts)?;
     let rec_ch = w.add_record_channel("/compass", &schema)?;
     let pose_ch = w.add_pose_channel("/poses")?;
@@ -69,14 +94,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let summary = w.finish()?;
     let write_s = started.elapsed().as_secs_f64();
+    let write_cpu_s = cpu_s() - cpu0;
     let messages = summary.messages as f64;
-    println!("simulated: {hours} h at 10 Hz, {} messages", summary.messages);
+    println!(
+        "simulated: {hours} h at 10 Hz, {} messages",
+        summary.messages
+    );
     println!(
         "write: {:.2} s, {:.2} M msgs/s, {:.0} MB/s of payload, {:.0} MB/s to disk",
         write_s,
         messages / write_s / 1e6,
         payload_bytes as f64 / write_s / 1e6,
         summary.bytes as f64 / write_s / 1e6
+    );
+    println!(
+        "write per CPU second: {:.2} M msgs/s ({write_cpu_s:.2} CPU s)",
+        messages / write_cpu_s / 1e6
     );
     println!(
         "file: {:.1} MB, {:.2} MB per simulated hour ({:.1} bytes/message)",
@@ -86,12 +119,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
 
     let started = Instant::now();
+    let cpu0 = cpu_s();
     let rec = Recording::open(&path)?;
     let open_s = started.elapsed().as_secs_f64();
     let records = rec.read_records("/compass")?;
     let records_s = started.elapsed().as_secs_f64() - open_s;
     let poses_table = rec.read_poses("/poses")?;
     let read_s = started.elapsed().as_secs_f64();
+    let read_cpu_s = cpu_s() - cpu0;
     assert_eq!(records.len() + poses_table.len(), summary.messages as usize);
     println!(
         "read: {:.2} s ({:.2} M msgs/s; open {:.3} s, records {:.2} M msgs/s, poses {:.2} M msgs/s)",
@@ -100,6 +135,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         open_s,
         records.len() as f64 / records_s / 1e6,
         poses_table.len() as f64 / (read_s - open_s - records_s) / 1e6
+    );
+    println!(
+        "read per CPU second: {:.2} M msgs/s ({read_cpu_s:.2} CPU s)",
+        messages / read_cpu_s / 1e6
     );
     std::fs::remove_file(&path)?;
     Ok(())

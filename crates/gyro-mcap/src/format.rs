@@ -543,20 +543,39 @@ pub(crate) fn decompress_chunk(
     match chunk.compression {
         "" => out.extend_from_slice(chunk.records),
         "zstd" => {
-            let guess = (chunk.records.len() as u64)
-                .saturating_mul(16)
-                .saturating_add(4096)
-                .min(declared);
-            out.reserve(guess as usize);
-            let decoder = zstd::stream::read::Decoder::with_buffer(chunk.records).map_err(|e| {
-                ParseError::new(chunk_offset, "chunk", format!("a zstd stream ({e})"))
-            })?;
-            decoder
-                .take(declared.saturating_add(1))
-                .read_to_end(out)
-                .map_err(|e| {
-                    ParseError::new(chunk_offset, "chunk", format!("valid zstd data ({e})"))
-                })?;
+            let compressed = chunk.records.len() as u64;
+            if declared
+                <= compressed
+                    .saturating_mul(PLAUSIBLE_ZSTD_RATIO)
+                    .saturating_add(1 << 20)
+            {
+                // The common case: one pass into a buffer of the declared size (reused across
+                // chunks by the callers). The bound keeps a lying size from reserving much more
+                // than the compressed bytes could plausibly produce.
+                out.reserve(declared as usize);
+                zstd::bulk::Decompressor::new()
+                    .and_then(|mut d| d.decompress_to_buffer(chunk.records, out))
+                    .map_err(|e| {
+                        ParseError::new(
+                            chunk_offset,
+                            "chunk",
+                            format!("valid zstd data of the declared size ({e})"),
+                        )
+                    })?;
+            } else {
+                // Implausible ratio: let the buffer grow only with the bytes zstd produces.
+                out.reserve((compressed.saturating_mul(16) + 4096).min(declared) as usize);
+                let decoder =
+                    zstd::stream::read::Decoder::with_buffer(chunk.records).map_err(|e| {
+                        ParseError::new(chunk_offset, "chunk", format!("a zstd stream ({e})"))
+                    })?;
+                decoder
+                    .take(declared.saturating_add(1))
+                    .read_to_end(out)
+                    .map_err(|e| {
+                        ParseError::new(chunk_offset, "chunk", format!("valid zstd data ({e})"))
+                    })?;
+            }
         }
         other => {
             return Err(ParseError::new(
@@ -596,6 +615,9 @@ pub(crate) fn decompress_chunk(
     }
     Ok(())
 }
+
+/// Uncompressed/compressed ratio up to which a chunk's buffer is reserved at its declared size.
+const PLAUSIBLE_ZSTD_RATIO: u64 = 64;
 
 /// Chunks larger than this are refused (our writer makes ~1 MiB chunks; other writers a few MiB).
 pub(crate) const MAX_CHUNK_UNCOMPRESSED: u64 = 256 << 20;

@@ -748,7 +748,14 @@ impl Recording {
                 format!("schema {POSE_SCHEMA_NAME}, found {:?}", schema.name),
             ));
         }
-        let mut t = PoseTable::default();
+        let n = self.stats.get(&ch.id).map_or(0, |s| s.count) as usize;
+        let mut t = PoseTable {
+            log_time_ns: Vec::with_capacity(n),
+            parent_frame: Vec::with_capacity(n),
+            child_frame: Vec::with_capacity(n),
+            translation_m: Vec::with_capacity(n),
+            rotation_xyzw: Vec::with_capacity(n),
+        };
         self.for_each_message(ch.id, |time, payload, chunk_offset| {
             let p = decode_pose(payload)
                 .map_err(|e| self.message_error(topic, chunk_offset, time, e))?;
