@@ -1,1 +1,29 @@
-//! gyro-model (placeholder until its issue lands)
+//! gyro-model: the physics of gyrocompasses.
+//!
+//! It owns the Earth and its frames (`earth`), designs as kinematic chains of bodies and hinges
+//! (`design`), the Lagrangian engine that derives equations of motion from kinematics and
+//! energies by exact automatic differentiation (`engine`, `real`), the compiled model that a
+//! scene's effects and a fidelity select (`model`), and the closed-form theory of the reference
+//! texts that tests hold the engine to (`theory`).
+//!
+//! It knows nothing of files other than the TOML text of a design, nothing of recordings,
+//! integrators or viewers: the simulation crate drives it through [`CompiledModel::rhs`] and
+//! [`CompiledModel::jacobian`], and a ship-motion program enters through the [`ShipMotion`] trait.
+//! Everything is SI; angles in radians; the world frame is North–West–Up (Beghin's).
+
+pub mod constants;
+pub mod design;
+pub mod earth;
+pub mod engine;
+pub mod error;
+pub mod expr;
+pub mod linalg;
+pub mod model;
+pub mod real;
+pub mod theory;
+
+pub use design::{CoordinateRole, Design, Root, Shape, SpinMode};
+pub use earth::{BaseEffects, Moored, ShipKinematics, ShipMotion};
+pub use error::InputError;
+pub use model::{CompiledModel, EFFECT_NAMES, Effects, Fidelity, InitialCondition, ModelError, ModelOptions, Readout};
+pub use real::{Jet, Real};

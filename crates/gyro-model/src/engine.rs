@@ -1,0 +1,367 @@
+//! The Lagrangian engine: from a kinematic chain to Lagrange's equations, by exact automatic
+//! differentiation.
+//!
+//! For every body, the absolute angular velocity and the velocity of the centre of gravity
+//! (relative to the pivot, in a non-rotating frame that follows it) are linear in the rates:
+//! ω = ω₀ + Σ Jwᵢ q̇ᵢ, v = ω₀ × c + Σ Jvᵢ q̇ᵢ, with columns built recursively down the chain
+//! (Jwᵢ = Σ_hinges a_h ∂φ_h/∂qᵢ). So T = ½ q̇ᵀM q̇ + bᵀq̇ + T₀ with
+//! M = Σ m JvᵀJv + JwᵀIJw, b = Σ m Jvᵀv₀ + Jwᵀ(Iω₀ + H ŝ), T₀ = ½m|v₀|² + ½ω₀ᵀIω₀ + H ŝ·ω₀
+//! (the rotor's held momentum H enters linearly: Routh reduction of the spin, Beghin §25).
+//!
+//! Lagrange's equation for coordinate i, d/dt ∂L/∂q̇ᵢ − ∂L/∂qᵢ = Qᵢ, becomes
+//!   M q̈ = c + K q̇,
+//!   cᵢ = Qᵢ − ∂ₜp₂ᵢ − ∂ₜbᵢ + ∂T₂/∂qᵢ + ∂T₀/∂qᵢ − ∂V/∂qᵢ,
+//!   Kᵢₖ = −∂p₂ᵢ/∂qₖ − (∂bᵢ/∂qₖ − ∂bₖ/∂qᵢ) − Cᵢₖ,
+//! where p₂ = M u is the momentum of the quadratic part at the velocity `u` (u = q̇ in `full`
+//! fidelity; with the precessional coordinates' rates zeroed in `gyroscopic` fidelity, where
+//! their rows of p₂ and M vanish). One pass of the kinematics on dual numbers carrying n + 1
+//! directions (the n coordinates and time) gives every derivative above; M comes from the
+//! velocity Jacobians' real parts. No second-order duals, no finite differences.
+//!
+//! The equations are formed here for *all* coordinates, servo-driven ones included; dropping the
+//! driven rows and folding their columns is the caller's step, done after (Beghin ch. I).
+
+use crate::design::{Body, Design, Force, Hinge, Root};
+use crate::real::{Jet, M3, Real, V3};
+
+/// The immutable, index-based form of a design's chain that the engine walks.
+#[derive(Clone, Debug)]
+pub struct Chain {
+    pub n: usize,
+    pub bodies: Vec<ChainBody>,
+    pub forces: Vec<Force>,
+    pub ship_root: bool,
+}
+
+#[derive(Clone, Debug)]
+pub struct ChainBody {
+    pub parent: Option<usize>,
+    pub origin: [f64; 3],
+    pub joint_rotation: Option<[[f64; 3]; 3]>,
+    pub hinge: Option<Hinge>,
+    pub mass: f64,
+    pub cg: [f64; 3],
+    pub inertia: [[f64; 3]; 3],
+    pub rotor_axis: Option<[f64; 3]>,
+    /// Whether the body contributes energy at all (massless gimbals are skipped).
+    pub physical: bool,
+}
+
+impl Chain {
+    pub fn from_design(d: &Design, include_force: impl Fn(&Force) -> bool) -> Chain {
+        let bodies = d
+            .bodies
+            .iter()
+            .map(|b: &Body| {
+                let ident = b.joint_rotation == [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+                let physical = b.mass_kg > 0.0
+                    || b.inertia_kg_m2.iter().flatten().any(|x| *x != 0.0)
+                    || b.rotor.is_some();
+                ChainBody {
+                    parent: b.parent,
+                    origin: b.joint_origin_m,
+                    joint_rotation: if ident { None } else { Some(b.joint_rotation) },
+                    hinge: b.hinge.clone(),
+                    mass: b.mass_kg,
+                    cg: b.cg_m,
+                    inertia: b.inertia_kg_m2,
+                    rotor_axis: b.rotor.as_ref().map(|r| r.axis),
+                    physical,
+                }
+            })
+            .collect();
+        Chain {
+            n: d.coordinates.len(),
+            bodies,
+            forces: d.forces.iter().filter(|f| include_force(f)).cloned().collect(),
+            ship_root: d.root == Root::Ship,
+        }
+    }
+}
+
+/// Inputs of one evaluation.
+pub struct EvalInput<'a, T: Real> {
+    /// All coordinates (servo-driven ones filled from their relations).
+    pub q: &'a [T],
+    /// All rates.
+    pub qd: &'a [T],
+    /// Velocity at which the quadratic kinetic energy is taken (see module doc).
+    pub u: &'a [T],
+    /// Rows whose quadratic kinetic energy is dropped (gyroscopic fidelity), or empty.
+    pub drop_quadratic: &'a [bool],
+    /// Spin momentum per body, N·m·s (0 without rotor).
+    pub spin_momentum: &'a [f64],
+    pub world_from_base: &'a M3<Jet<T, 1>>,
+    pub base_rate: &'a V3<Jet<T, 1>>,
+    pub gravity: [f64; 3],
+}
+
+/// Outputs: M (n×n, row-major), K (n×n), c (n).
+pub struct EvalOutput<'a, T: Real> {
+    pub m: &'a mut [T],
+    pub k: &'a mut [T],
+    pub c: &'a mut [T],
+}
+
+#[derive(Clone, Copy)]
+struct BodyKin<S, const N: usize> {
+    r: M3<S>,
+    p: V3<S>,
+    jw: [V3<S>; N],
+    jm: [V3<S>; N],
+}
+
+#[inline(always)]
+fn embed_time<T: Real, const N: usize>(x: Jet<T, 1>, slot: usize) -> Jet<T, N> {
+    let mut d = [T::zero(); N];
+    d[slot] = x.d[0];
+    Jet { v: x.v, d }
+}
+
+/// Forms M, K, c for all coordinates. `N` must be `chain.n + 1`.
+pub fn evaluate<T: Real, const N: usize>(chain: &Chain, inp: &EvalInput<T>, out: &mut EvalOutput<T>) {
+    let n = chain.n;
+    debug_assert_eq!(N, n + 1);
+    type S<T, const N: usize> = Jet<T, N>;
+    let zero = S::<T, N>::zero();
+    let q: [S<T, N>; N] = std::array::from_fn(|i| if i < n { Jet::variable(inp.q[i], i) } else { zero });
+    let base_r = M3(inp.world_from_base.0.map(|row| row.map(|x| embed_time::<T, N>(x, n))));
+    let w0 = V3(inp.base_rate.0.map(|x| embed_time::<T, N>(x, n)));
+
+    let mut p2 = [zero; N];
+    let mut b = [zero; N];
+    let mut t2 = zero;
+    let mut t0 = zero;
+    let mut v = zero;
+    for x in out.m.iter_mut() {
+        *x = T::zero();
+    }
+    let mut kin: Vec<BodyKin<S<T, N>, N>> = Vec::with_capacity(chain.bodies.len());
+    let vz = V3::<S<T, N>>::zero();
+    for (bi, body) in chain.bodies.iter().enumerate() {
+        let (r_par, p_par, jw_par, jm_par) = match body.parent {
+            Some(pi) => (kin[pi].r, kin[pi].p, kin[pi].jw, kin[pi].jm),
+            None => (base_r, vz, [vz; N], [vz; N]),
+        };
+        let p_b = p_par.add(&r_par.mul_v(&V3::from_f64(body.origin)));
+        let r_joint = match &body.joint_rotation {
+            Some(jr) => r_par.mul_m(&M3::from_f64(*jr)),
+            None => r_par,
+        };
+        let (r_b, jw, jm) = match &body.hinge {
+            Some(h) => {
+                let phi = h.angle.eval(&q[..n]);
+                let mut grad = [zero; N];
+                h.angle.add_gradient(&q[..n], &mut grad[..n]);
+                let a = r_joint.col(h.axis);
+                let axp = a.cross(&p_b);
+                let mut jw = jw_par;
+                let mut jm = jm_par;
+                for i in 0..n {
+                    if grad[i] != zero {
+                        jw[i] = jw[i].add(&a.scale(grad[i]));
+                        jm[i] = jm[i].add(&axp.scale(grad[i]));
+                    }
+                }
+                (r_joint.rotate_about_axis(h.axis, phi), jw, jm)
+            }
+            None => (r_joint, jw_par, jm_par),
+        };
+        kin.push(BodyKin { r: r_b, p: p_b, jw, jm });
+        if !body.physical {
+            continue;
+        }
+        let m = body.mass;
+        let c_w = p_b.add(&r_b.mul_v(&V3::from_f64(body.cg)));
+        let ib = M3::<S<T, N>>::from_f64(body.inertia);
+        let iw = |x: &V3<S<T, N>>| r_b.mul_v(&ib.mul_v(&r_b.tmul_v(x)));
+        let jv: [V3<S<T, N>>; N] = std::array::from_fn(|i| if i < n { jw[i].cross(&c_w).sub(&jm[i]) } else { vz });
+        let v0 = w0.cross(&c_w);
+        let mut w_u = vz;
+        let mut v_u = vz;
+        for i in 0..n {
+            let ui = S::<T, N>::constant(inp.u[i]);
+            if inp.u[i] != T::zero() {
+                w_u = w_u.add(&jw[i].scale(ui));
+                v_u = v_u.add(&jv[i].scale(ui));
+            }
+        }
+        let h_u = iw(&w_u);
+        let iw0 = iw(&w0);
+        let hs = inp.spin_momentum[bi];
+        let mut h0 = iw0;
+        let mut spin_term = zero;
+        if let Some(ax) = body.rotor_axis {
+            let s_w = r_b.mul_v(&V3::from_f64(ax));
+            h0 = h0.add(&s_w.scale_f(hs));
+            spin_term = s_w.dot(&w0) * hs;
+        }
+        for i in 0..n {
+            if !inp.drop_quadratic.is_empty() && inp.drop_quadratic[i] {
+                // no quadratic momentum for this row
+            } else {
+                p2[i] += jv[i].dot(&v_u) * m + jw[i].dot(&h_u);
+            }
+            b[i] += jv[i].dot(&v0) * m + jw[i].dot(&h0);
+        }
+        t2 += (v_u.dot(&v_u) * m + w_u.dot(&h_u)) * 0.5;
+        t0 += (v0.dot(&v0) * m + w0.dot(&iw0)) * 0.5 + spin_term;
+        v -= V3::from_f64(inp.gravity).dot(&c_w) * m;
+        // Mass matrix from the real parts of the Jacobians.
+        let rr = M3(r_b.0.map(|row| row.map(|x| x.v)));
+        let ibr = M3::<T>::from_f64(body.inertia);
+        let jvr: [V3<T>; N] = std::array::from_fn(|i| V3(jv[i].0.map(|x| x.v)));
+        let jwr: [V3<T>; N] = std::array::from_fn(|i| V3(jw[i].0.map(|x| x.v)));
+        for j in 0..n {
+            if inp.drop_quadratic.get(j).copied().unwrap_or(false) {
+                continue;
+            }
+            let ijw = rr.mul_v(&ibr.mul_v(&rr.tmul_v(&jwr[j])));
+            for i in 0..n {
+                if inp.drop_quadratic.get(i).copied().unwrap_or(false) {
+                    continue;
+                }
+                out.m[i * n + j] += jvr[i].dot(&jvr[j]) * m + jwr[i].dot(&ijw);
+            }
+        }
+    }
+
+    // Generalised forces.
+    let mut qf = [T::zero(); N];
+    for x in out.k.iter_mut() {
+        *x = T::zero();
+    }
+    for f in &chain.forces {
+        match f {
+            Force::Damper { expr, coefficient, .. } => {
+                let mut g = [T::zero(); N];
+                let qv: [T; N] = std::array::from_fn(|i| if i < n { inp.q[i] } else { T::zero() });
+                expr.add_gradient(&qv[..n], &mut g[..n]);
+                for i in 0..n {
+                    for k in 0..n {
+                        out.k[i * n + k] -= g[i] * g[k] * *coefficient;
+                    }
+                }
+            }
+            Force::Spring { expr, stiffness, rest, preload, .. } => {
+                let e = expr.eval(&q[..n]);
+                let de = e - *rest;
+                v += de * de * (0.5 * stiffness) + e * *preload;
+            }
+            Force::BodyForce { body, direction, force_n, point, .. } => {
+                let k = &kin[*body];
+                let pb = V3([point[0].eval(&q[..n]), point[1].eval(&q[..n]), point[2].eval(&q[..n])]);
+                let r_p = k.p.add(&k.r.mul_v(&pb));
+                let f_w = k.r.mul_v(&V3::from_f64(*direction)).scale_f(*force_n);
+                let tau = r_p.cross(&f_w);
+                for (i, qi) in qf.iter_mut().enumerate().take(n) {
+                    *qi += k.jw[i].dot(&tau).v;
+                }
+            }
+            Force::Generalized { coordinate, torque, .. } => {
+                qf[*coordinate] += torque.eval(&q[..n]).v;
+            }
+        }
+    }
+
+    for i in 0..n {
+        out.c[i] = qf[i] - p2[i].d[n] - b[i].d[n] + t2.d[i] + t0.d[i] - v.d[i];
+        for k in 0..n {
+            out.k[i * n + k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
+        }
+    }
+}
+
+/// Calls `evaluate` with N = n + 1 for the chain sizes gyrolab supports (1 to 15 coordinates).
+#[macro_export]
+#[doc(hidden)]
+macro_rules! dispatch_n {
+    ($n:expr, $f:ident, $($arg:expr),*) => {
+        match $n {
+            1 => $f::<_, 2>($($arg),*),
+            2 => $f::<_, 3>($($arg),*),
+            3 => $f::<_, 4>($($arg),*),
+            4 => $f::<_, 5>($($arg),*),
+            5 => $f::<_, 6>($($arg),*),
+            6 => $f::<_, 7>($($arg),*),
+            7 => $f::<_, 8>($($arg),*),
+            8 => $f::<_, 9>($($arg),*),
+            9 => $f::<_, 10>($($arg),*),
+            10 => $f::<_, 11>($($arg),*),
+            11 => $f::<_, 12>($($arg),*),
+            12 => $f::<_, 13>($($arg),*),
+            13 => $f::<_, 14>($($arg),*),
+            14 => $f::<_, 15>($($arg),*),
+            _ => $f::<_, 16>($($arg),*),
+        }
+    };
+}
+
+/// Largest chain the engine compiles for.
+pub const MAX_COORDINATES: usize = 15;
+
+/// Evaluates for any supported chain size.
+pub fn evaluate_any<T: Real>(chain: &Chain, inp: &EvalInput<T>, out: &mut EvalOutput<T>) {
+    dispatch_n!(chain.n, evaluate, chain, inp, out)
+}
+
+/// Poses of every body for display and recording: world_from_body rotation and the body
+/// origin's position relative to the pivot, in world axes (plain `f64`).
+pub fn body_poses(chain: &Chain, q: &[f64], world_from_base: &M3<f64>) -> Vec<([[f64; 3]; 3], [f64; 3])> {
+    let mut out: Vec<(M3<f64>, V3<f64>)> = Vec::with_capacity(chain.bodies.len());
+    for body in &chain.bodies {
+        let (r_par, p_par) = match body.parent {
+            Some(pi) => out[pi],
+            None => (*world_from_base, V3::zero()),
+        };
+        let p_b = p_par.add(&r_par.mul_v(&V3::from_f64(body.origin)));
+        let r_joint = match &body.joint_rotation {
+            Some(jr) => r_par.mul_m(&M3::from_f64(*jr)),
+            None => r_par,
+        };
+        let r_b = match &body.hinge {
+            Some(h) => r_joint.rotate_about_axis(h.axis, h.angle.eval(q)),
+            None => r_joint,
+        };
+        out.push((r_b, p_b));
+    }
+    out.into_iter().map(|(r, p)| (r.0, p.0)).collect()
+}
+
+/// Absolute angular velocity of every body (world axes) at a state, f64.
+pub fn body_angular_velocities(
+    chain: &Chain,
+    q: &[f64],
+    qd: &[f64],
+    world_from_base: &M3<f64>,
+    base_rate: &V3<f64>,
+) -> Vec<[f64; 3]> {
+    let poses = body_poses(chain, q, world_from_base);
+    let mut w: Vec<V3<f64>> = Vec::with_capacity(chain.bodies.len());
+    for (bi, body) in chain.bodies.iter().enumerate() {
+        let parent_w = match body.parent {
+            Some(pi) => w[pi],
+            None => *base_rate,
+        };
+        let wb = match &body.hinge {
+            Some(h) => {
+                let r_par = match body.parent {
+                    Some(pi) => M3(poses[pi].0),
+                    None => *world_from_base,
+                };
+                let r_joint = match &body.joint_rotation {
+                    Some(jr) => r_par.mul_m(&M3(*jr)),
+                    None => r_par,
+                };
+                let mut g = vec![0.0; chain.n];
+                h.angle.add_gradient(q, &mut g);
+                let rate: f64 = g.iter().zip(qd).map(|(a, b)| a * b).sum();
+                parent_w.add(&r_joint.col(h.axis).scale(rate))
+            }
+            None => parent_w,
+        };
+        let _ = bi;
+        w.push(wb);
+    }
+    w.into_iter().map(|v| v.0).collect()
+}

@@ -1,0 +1,774 @@
+//! The compiled model: a design, the effects a scene calls for, a fidelity and a ship-motion
+//! program, turned into a first-order system ẋ = f(t, x) with an exact Jacobian.
+//!
+//! Immutable after [`CompiledModel::compile`] (MuJoCo's model/data split): states are plain
+//! slices the integrator owns. Stages per evaluation: base motion (only the effects compiled in)
+//! → chain kinematics and energies on dual numbers (`engine`) → equations of the non-driven
+//! coordinates with servo relations folded in → solve for accelerations (or precession rates).
+//!
+//! State layout: `full` and `linear`: [q; q̇] over the non-driven coordinates; `gyroscopic`:
+//! [q; q̇ₘ] where the precessional coordinates (those the spin couples gyroscopically) have
+//! first-order equations and only the others keep their rates.
+
+use crate::design::{CoordinateRole, Design, Force, Root, SpinMode};
+use crate::earth::{BaseEffects, ShipMotion, apparent_gravity, base_motion};
+use crate::engine::{Chain, EvalInput, EvalOutput, MAX_COORDINATES, body_poses, evaluate_any};
+use crate::linalg::{self, solve_in_place};
+use crate::real::{Jet, M3, Real, V3};
+use std::fmt;
+use std::str::FromStr;
+
+/// Model fidelity (design.md §6).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Fidelity {
+    /// All inertias; nutation resolved.
+    Full,
+    /// Quadratic kinetic energy of the gyroscopically coupled coordinates dropped: first-order
+    /// precession equations for them.
+    Gyroscopic,
+    /// The exact Jacobian at the equilibrium: a linear state-space model.
+    Linear,
+}
+
+impl FromStr for Fidelity {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "full" => Ok(Fidelity::Full),
+            "gyroscopic" => Ok(Fidelity::Gyroscopic),
+            "linear" => Ok(Fidelity::Linear),
+            _ => Err(format!("unknown fidelity `{s}` (allowed: full, gyroscopic, linear)")),
+        }
+    }
+}
+
+impl fmt::Display for Fidelity {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Fidelity::Full => "full",
+            Fidelity::Gyroscopic => "gyroscopic",
+            Fidelity::Linear => "linear",
+        })
+    }
+}
+
+/// Every effect a scene can call for, by the name used in scene files and recordings.
+pub const EFFECT_NAMES: [&str; 8] = [
+    "earth_rotation",
+    "transport_rate",
+    "ship_acceleration",
+    "turn_rate",
+    "roll_pitch",
+    "base_coriolis",
+    "damper",
+    "friction",
+];
+
+/// The effects compiled into a model. Absent effects are never evaluated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Effects {
+    pub base: BaseEffects,
+    /// Circulatory damping elements of the design (air jets, generalised forces).
+    pub damper: bool,
+    /// Viscous friction elements of the design.
+    pub friction: bool,
+}
+
+impl Effects {
+    pub fn all() -> Effects {
+        Effects {
+            base: BaseEffects {
+                earth_rotation: true,
+                transport_rate: true,
+                ship_acceleration: true,
+                turn_rate: true,
+                roll_pitch: true,
+                base_coriolis: true,
+            },
+            damper: true,
+            friction: true,
+        }
+    }
+    pub fn get(&self, name: &str) -> Option<bool> {
+        let b = &self.base;
+        Some(match name {
+            "earth_rotation" => b.earth_rotation,
+            "transport_rate" => b.transport_rate,
+            "ship_acceleration" => b.ship_acceleration,
+            "turn_rate" => b.turn_rate,
+            "roll_pitch" => b.roll_pitch,
+            "base_coriolis" => b.base_coriolis,
+            "damper" => self.damper,
+            "friction" => self.friction,
+            _ => return None,
+        })
+    }
+    pub fn set(&mut self, name: &str, on: bool) -> Result<(), String> {
+        let b = &mut self.base;
+        match name {
+            "earth_rotation" => b.earth_rotation = on,
+            "transport_rate" => b.transport_rate = on,
+            "ship_acceleration" => b.ship_acceleration = on,
+            "turn_rate" => b.turn_rate = on,
+            "roll_pitch" => b.roll_pitch = on,
+            "base_coriolis" => b.base_coriolis = on,
+            "damper" => self.damper = on,
+            "friction" => self.friction = on,
+            _ => return Err(format!("unknown effect `{name}` (allowed: {})", EFFECT_NAMES.join(", "))),
+        }
+        Ok(())
+    }
+    /// Names of the active effects, in the canonical order.
+    pub fn names(&self) -> Vec<&'static str> {
+        EFFECT_NAMES.iter().copied().filter(|n| self.get(n) == Some(true)).collect()
+    }
+    fn include_force(&self, f: &Force) -> bool {
+        match f {
+            Force::Damper { .. } => self.friction,
+            Force::BodyForce { .. } | Force::Generalized { .. } => self.damper,
+            Force::Spring { .. } => true,
+        }
+    }
+}
+
+/// Where the run starts.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct InitialCondition {
+    /// Start from the apparent equilibrium of the design at t = 0 (else from all coordinates 0).
+    pub from_equilibrium: bool,
+    /// Offsets added to coordinates (full index, rad).
+    pub offsets_rad: Vec<(usize, f64)>,
+    /// Initial rates (full index, rad/s).
+    pub rates_rad_per_s: Vec<(usize, f64)>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelOptions {
+    pub fidelity: Fidelity,
+    pub effects: Effects,
+    /// Compass pivot relative to the ship's roll centre, ship axes (x fwd, y port, z up), m.
+    pub pivot_m: [f64; 3],
+    pub initial: InitialCondition,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum ModelError {
+    TooManyCoordinates(usize),
+    NoEquilibrium(String),
+    Singular(String),
+    Invalid(String),
+}
+
+impl fmt::Display for ModelError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ModelError::TooManyCoordinates(n) => write!(f, "the design has {n} coordinates; the engine supports at most {MAX_COORDINATES}"),
+            ModelError::NoEquilibrium(s) => write!(f, "no apparent equilibrium found: {s}"),
+            ModelError::Singular(s) => write!(f, "singular equations: {s}"),
+            ModelError::Invalid(s) => write!(f, "{s}"),
+        }
+    }
+}
+impl std::error::Error for ModelError {}
+
+/// What the card shows and what the chain does at one instant.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Readout {
+    /// Compass heading minus true heading, rad (positive: the card reads too high / easterly).
+    pub reading_error_rad: f64,
+    /// Tilt of the north-seeking axis, North end down positive, rad.
+    pub tilt_rad: f64,
+    pub true_heading_rad: f64,
+    pub compass_heading_rad: f64,
+    /// All coordinates (servo-driven included), rad.
+    pub q: Vec<f64>,
+    /// All rates, rad/s.
+    pub qd: Vec<f64>,
+}
+
+#[derive(Clone, Debug)]
+struct StationaryBase {
+    r: M3<Jet<f64, 1>>,
+    w: V3<Jet<f64, 1>>,
+    g: [f64; 3],
+}
+
+/// A design compiled for a scene: immutable; evaluate it with any state.
+#[derive(Clone, Debug)]
+pub struct CompiledModel<M: ShipMotion> {
+    pub design: Design,
+    pub chain: Chain,
+    pub motion: M,
+    pub fidelity: Fidelity,
+    pub effects: Effects,
+    pub pivot_m: [f64; 3],
+    /// Full indices of the non-driven coordinates.
+    pub independent: Vec<usize>,
+    /// q_full = S q_ind + s0.
+    servo_s: Vec<f64>,
+    servo_s0: Vec<f64>,
+    /// Per independent coordinate: precessional (first-order in `gyroscopic` fidelity).
+    pub precessional: Vec<bool>,
+    drop_full: Vec<bool>,
+    pub spin_momentum: Vec<f64>,
+    stationary: Option<StationaryBase>,
+    /// `linear` fidelity: A (dim×dim) about x_eq.
+    linear_a: Vec<f64>,
+    /// Apparent equilibrium state (full-fidelity layout).
+    pub x_equilibrium: Vec<f64>,
+    /// Initial state in this model's layout.
+    pub x0: Vec<f64>,
+}
+
+impl<M: ShipMotion> CompiledModel<M> {
+    pub fn compile(design: Design, motion: M, opts: ModelOptions) -> Result<Self, ModelError> {
+        let n = design.coordinates.len();
+        if n > MAX_COORDINATES {
+            return Err(ModelError::TooManyCoordinates(n));
+        }
+        let effects = opts.effects;
+        let chain = Chain::from_design(&design, |f| effects.include_force(f));
+        let independent: Vec<usize> = (0..n).filter(|&i| design.coordinates[i].servo.is_none()).collect();
+        let ni = independent.len();
+        let mut servo_s = vec![0.0; n * ni];
+        let mut servo_s0 = vec![0.0; n];
+        for (col, &i) in independent.iter().enumerate() {
+            servo_s[i * ni + col] = 1.0;
+        }
+        for (i, c) in design.coordinates.iter().enumerate() {
+            if let Some(rel) = &c.servo {
+                servo_s0[i] = rel.constant;
+                for &(j, a) in &rel.linear {
+                    let col = independent.iter().position(|&x| x == j).ok_or_else(|| {
+                        ModelError::Invalid(format!("servo relation of `{}` reads a driven coordinate", c.name))
+                    })?;
+                    servo_s[i * ni + col] += a;
+                }
+            }
+        }
+        let stationary = if motion.is_stationary() {
+            let (r, w) = base_motion(&motion, design.root == Root::Ship, &effects.base, 0.0f64);
+            Some(StationaryBase { r, w, g: apparent_gravity(&motion, &effects.base, opts.pivot_m, 0.0) })
+        } else {
+            None
+        };
+        let spin_momentum = design
+            .bodies
+            .iter()
+            .map(|b| b.rotor.as_ref().map_or(0.0, |r| r.polar_inertia_kg_m2 * r.spin_rad_per_s))
+            .collect();
+        let mut model = CompiledModel {
+            design,
+            chain,
+            motion,
+            fidelity: Fidelity::Full,
+            effects,
+            pivot_m: opts.pivot_m,
+            independent,
+            servo_s,
+            servo_s0,
+            precessional: vec![false; ni],
+            drop_full: Vec::new(),
+            spin_momentum,
+            stationary,
+            linear_a: Vec::new(),
+            x_equilibrium: Vec::new(),
+            x0: Vec::new(),
+        };
+        // Initial state in the full layout.
+        let mut x = vec![0.0; 2 * ni];
+        model.update_free_rotors(&x);
+        if opts.initial.from_equilibrium {
+            let q = model.equilibrium(&x[..ni])?;
+            x[..ni].copy_from_slice(&q);
+            model.update_free_rotors(&x);
+        }
+        model.x_equilibrium = x.clone();
+        for &(i, off) in &opts.initial.offsets_rad {
+            let col = model.independent.iter().position(|&j| j == i).ok_or_else(|| {
+                ModelError::Invalid(format!("cannot offset the servo-driven coordinate `{}`", model.design.coordinates[i].name))
+            })?;
+            x[col] += off;
+        }
+        for &(i, rate) in &opts.initial.rates_rad_per_s {
+            let col = model.independent.iter().position(|&j| j == i).ok_or_else(|| {
+                ModelError::Invalid(format!("cannot set the rate of the servo-driven coordinate `{}`", model.design.coordinates[i].name))
+            })?;
+            x[ni + col] = rate;
+        }
+        // A free rotor's absolute spin is fixed by the start: relative spin + carrier rate.
+        model.update_free_rotors(&x);
+        model.precessional = model.find_precessional(&x);
+        model.fidelity = opts.fidelity;
+        match opts.fidelity {
+            Fidelity::Full => model.x0 = x,
+            Fidelity::Gyroscopic => {
+                if !model.precessional.iter().any(|p| *p) {
+                    // Nothing is gyroscopically coupled (e.g. a one-coordinate gyroscope):
+                    // the gyroscopic model is the full one.
+                    model.fidelity = Fidelity::Full;
+                    model.x0 = x;
+                } else {
+                    model.drop_full = vec![false; n];
+                    for (col, &i) in model.independent.iter().enumerate() {
+                        model.drop_full[i] = model.precessional[col];
+                    }
+                    let mut x0: Vec<f64> = x[..ni].to_vec();
+                    for col in 0..ni {
+                        if !model.precessional[col] {
+                            x0.push(x[ni + col]);
+                        }
+                    }
+                    model.x0 = x0;
+                    // Check the precessional block is solvable now rather than mid-run.
+                    let mut dx = vec![0.0; model.dim()];
+                    if !model.rhs_generic(Fidelity::Gyroscopic, 0.0, &model.x0, &mut dx) {
+                        return Err(ModelError::Singular("the precessional equations cannot be solved for their rates (use fidelity = full)".into()));
+                    }
+                }
+            }
+            Fidelity::Linear => {
+                let xe = model.x_equilibrium.clone();
+                let dim = 2 * ni;
+                let mut a = vec![0.0; dim * dim];
+                model.jacobian_at(Fidelity::Full, 0.0, &xe, &mut a);
+                model.linear_a = a;
+                model.x0 = x;
+            }
+        }
+        Ok(model)
+    }
+
+    pub fn dim(&self) -> usize {
+        let ni = self.independent.len();
+        match self.fidelity {
+            Fidelity::Gyroscopic => ni + self.precessional.iter().filter(|p| !**p).count(),
+            _ => 2 * ni,
+        }
+    }
+
+    /// Names of the state components, for recordings.
+    pub fn state_names(&self) -> Vec<String> {
+        let mut v: Vec<String> = self.independent.iter().map(|&i| self.design.coordinates[i].name.clone()).collect();
+        for (col, &i) in self.independent.iter().enumerate() {
+            if self.fidelity != Fidelity::Gyroscopic || !self.precessional[col] {
+                v.push(format!("{}_rate", self.design.coordinates[i].name));
+            }
+        }
+        v
+    }
+
+    /// The A matrix of the `linear` fidelity (empty otherwise).
+    pub fn linear_matrix(&self) -> &[f64] {
+        &self.linear_a
+    }
+
+    /// True when the compiled model is autonomous (nothing depends on time).
+    pub fn is_autonomous(&self) -> bool {
+        self.stationary.is_some()
+    }
+
+    /// ẋ = f(t, x). Returns false when the equations are singular at this state.
+    pub fn rhs(&self, t: f64, x: &[f64], dx: &mut [f64]) -> bool {
+        if self.fidelity == Fidelity::Linear {
+            return self.rhs_linear(t, x, dx);
+        }
+        self.rhs_generic(self.fidelity, t, x, dx)
+    }
+
+    fn rhs_linear(&self, t: f64, x: &[f64], dx: &mut [f64]) -> bool {
+        let dim = self.dim();
+        let xe = &self.x_equilibrium;
+        if self.stationary.is_some() {
+            for i in 0..dim {
+                dx[i] = 0.0;
+            }
+        } else {
+            // The forcing of the scene, taken by the nonlinear model at the equilibrium state.
+            if !self.rhs_generic(Fidelity::Full, t, xe, dx) {
+                return false;
+            }
+        }
+        for i in 0..dim {
+            let mut s = 0.0;
+            for j in 0..dim {
+                s += self.linear_a[i * dim + j] * (x[j] - xe[j]);
+            }
+            dx[i] += s;
+        }
+        true
+    }
+
+    /// Exact Jacobian df/dx (row-major dim×dim), by nested dual numbers.
+    pub fn jacobian(&self, t: f64, x: &[f64], jac: &mut [f64]) {
+        if self.fidelity == Fidelity::Linear {
+            jac.copy_from_slice(&self.linear_a);
+            return;
+        }
+        self.jacobian_at(self.fidelity, t, x, jac);
+    }
+
+    /// Exact Jacobian of the equations at a given fidelity (`full` or `gyroscopic`).
+    pub fn jacobian_at(&self, fidelity: Fidelity, t: f64, x: &[f64], jac: &mut [f64]) {
+        let dim = if fidelity == Fidelity::Gyroscopic { self.dim() } else { 2 * self.independent.len() };
+        let mut xj = vec![Jet::<f64, 1>::constant(0.0); dim];
+        let mut dxj = vec![Jet::<f64, 1>::constant(0.0); dim];
+        for col in 0..dim {
+            for i in 0..dim {
+                xj[i] = Jet { v: x[i], d: [if i == col { 1.0 } else { 0.0 }] };
+            }
+            self.rhs_generic(fidelity, Jet::constant(t), &xj, &mut dxj);
+            for row in 0..dim {
+                jac[row * dim + col] = dxj[row].d[0];
+            }
+        }
+    }
+
+    /// Expands independent coordinates to all coordinates.
+    fn expand<T: Real>(&self, q_ind: &[T], out: &mut [T], with_offset: bool) {
+        let n = self.chain.n;
+        let ni = self.independent.len();
+        for i in 0..n {
+            let mut s = if with_offset { T::cst(self.servo_s0[i]) } else { T::zero() };
+            for j in 0..ni {
+                let a = self.servo_s[i * ni + j];
+                if a != 0.0 {
+                    s += q_ind[j] * a;
+                }
+            }
+            out[i] = s;
+        }
+    }
+
+    fn base_at<T: Real>(&self, t: T) -> (M3<Jet<T, 1>>, V3<Jet<T, 1>>, [f64; 3]) {
+        match &self.stationary {
+            Some(s) => {
+                let lift = |x: Jet<f64, 1>| Jet { v: T::cst(x.v), d: [T::cst(x.d[0])] };
+                (M3(s.r.0.map(|r| r.map(lift))), V3(s.w.0.map(lift)), s.g)
+            }
+            None => {
+                let (r, w) = base_motion(&self.motion, self.chain.ship_root, &self.effects.base, t);
+                (r, w, apparent_gravity(&self.motion, &self.effects.base, self.pivot_m, t.re()))
+            }
+        }
+    }
+
+    /// Forms the reduced equations: M_red (ni×ni), K_red (ni×ni), c_red (ni) at (t, q_ind, qd_ind, u_ind).
+    #[allow(clippy::too_many_arguments)]
+    fn reduced<T: Real>(
+        &self,
+        drop_precessional_inertia: bool,
+        t: T,
+        q_ind: &[T],
+        qd_ind: &[T],
+        u_ind: &[T],
+        m_red: &mut [T],
+        k_red: &mut [T],
+        c_red: &mut [T],
+    ) {
+        const MX: usize = MAX_COORDINATES + 1;
+        let n = self.chain.n;
+        let ni = self.independent.len();
+        let mut q = [T::zero(); MX];
+        let mut qd = [T::zero(); MX];
+        let mut u = [T::zero(); MX];
+        self.expand(q_ind, &mut q[..n], true);
+        self.expand(qd_ind, &mut qd[..n], false);
+        self.expand(u_ind, &mut u[..n], false);
+        let (r, w, g) = self.base_at(t);
+        let mut m = [T::zero(); MX * MX];
+        let mut k = [T::zero(); MX * MX];
+        let mut c = [T::zero(); MX];
+        let inp = EvalInput {
+            q: &q[..n],
+            qd: &qd[..n],
+            u: &u[..n],
+            drop_quadratic: if drop_precessional_inertia { &self.drop_full } else { &[] },
+            spin_momentum: &self.spin_momentum,
+            world_from_base: &r,
+            base_rate: &w,
+            gravity: g,
+        };
+        let mut out = EvalOutput { m: &mut m[..n * n], k: &mut k[..n * n], c: &mut c[..n] };
+        evaluate_any(&self.chain, &inp, &mut out);
+        // Rows of the non-driven coordinates only; driven columns folded into their drivers.
+        let s = &self.servo_s;
+        for (ri, &i) in self.independent.iter().enumerate() {
+            c_red[ri] = c[i];
+            for cj in 0..ni {
+                let mut sm = T::zero();
+                let mut sk = T::zero();
+                for l in 0..n {
+                    let a = s[l * ni + cj];
+                    if a != 0.0 {
+                        sm += m[i * n + l] * a;
+                        sk += k[i * n + l] * a;
+                    }
+                }
+                m_red[ri * ni + cj] = sm;
+                k_red[ri * ni + cj] = sk;
+            }
+        }
+    }
+
+    pub(crate) fn rhs_generic<T: Real>(&self, fidelity: Fidelity, t: T, x: &[T], dx: &mut [T]) -> bool {
+        const MX: usize = MAX_COORDINATES + 1;
+        let ni = self.independent.len();
+        let mut m = [T::zero(); MX * MX];
+        let mut k = [T::zero(); MX * MX];
+        let mut c = [T::zero(); MX];
+        let q = &x[..ni];
+        match fidelity {
+            Fidelity::Gyroscopic => {
+                let mut qd = [T::zero(); MX];
+                let mut mi = 0;
+                for col in 0..ni {
+                    if !self.precessional[col] {
+                        qd[col] = x[ni + mi];
+                        mi += 1;
+                    }
+                }
+                let u = qd;
+                self.reduced(true, t, q, &qd[..ni], &u[..ni], &mut m[..ni * ni], &mut k[..ni * ni], &mut c[..ni]);
+                let gi: Vec<usize> = (0..ni).filter(|&j| self.precessional[j]).collect();
+                let mis: Vec<usize> = (0..ni).filter(|&j| !self.precessional[j]).collect();
+                let ng = gi.len();
+                let mut a = [T::zero(); MX * MX];
+                let mut r = [T::zero(); MX];
+                for (a_r, &i) in gi.iter().enumerate() {
+                    let mut s = c[i];
+                    for &j in &mis {
+                        s += k[i * ni + j] * qd[j];
+                    }
+                    r[a_r] = -s;
+                    for (a_c, &j) in gi.iter().enumerate() {
+                        a[a_r * ng + a_c] = k[i * ni + j];
+                    }
+                }
+                if !solve_in_place(&mut a[..ng * ng], &mut r[..ng], ng) {
+                    return false;
+                }
+                for (a_r, &i) in gi.iter().enumerate() {
+                    qd[i] = r[a_r];
+                }
+                dx[..ni].copy_from_slice(&qd[..ni]);
+                let nm = mis.len();
+                if nm > 0 {
+                    let mut mm = [T::zero(); MX * MX];
+                    let mut rm = [T::zero(); MX];
+                    for (a_r, &i) in mis.iter().enumerate() {
+                        let mut s = c[i];
+                        for j in 0..ni {
+                            s += k[i * ni + j] * qd[j];
+                        }
+                        rm[a_r] = s;
+                        for (a_c, &j) in mis.iter().enumerate() {
+                            mm[a_r * nm + a_c] = m[i * ni + j];
+                        }
+                    }
+                    if !solve_in_place(&mut mm[..nm * nm], &mut rm[..nm], nm) {
+                        return false;
+                    }
+                    dx[ni..ni + nm].copy_from_slice(&rm[..nm]);
+                }
+                true
+            }
+            _ => {
+                let qd = &x[ni..2 * ni];
+                self.reduced(false, t, q, qd, qd, &mut m[..ni * ni], &mut k[..ni * ni], &mut c[..ni]);
+                let mut r = [T::zero(); MX];
+                for i in 0..ni {
+                    let mut s = c[i];
+                    for j in 0..ni {
+                        s += k[i * ni + j] * qd[j];
+                    }
+                    r[i] = s;
+                }
+                if !solve_in_place(&mut m[..ni * ni], &mut r[..ni], ni) {
+                    return false;
+                }
+                dx[..ni].copy_from_slice(qd);
+                dx[ni..2 * ni].copy_from_slice(&r[..ni]);
+                true
+            }
+        }
+    }
+
+    /// Newton's method on the static equations (rates zero) at t = 0, from `q_start`.
+    fn equilibrium(&self, q_start: &[f64]) -> Result<Vec<f64>, ModelError> {
+        let ni = self.independent.len();
+        let mut q = q_start.to_vec();
+        let zero = vec![0.0; ni];
+        let mut m = vec![0.0; ni * ni];
+        let mut k = vec![0.0; ni * ni];
+        let mut c = vec![0.0; ni];
+        let residual = |q: &[f64], c: &mut [f64], m: &mut [f64], k: &mut [f64]| {
+            self.reduced(false, 0.0, q, &zero, &zero, m, k, c);
+        };
+        residual(&q, &mut c, &mut m, &mut k);
+        let scale = c.iter().map(|x| x.abs()).fold(0.0, f64::max).max(1e-300);
+        let mut norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for _ in 0..60 {
+            // Jacobian of the static torques by dual numbers, column by column.
+            let mut jac = vec![0.0; ni * ni];
+            let mut qj = vec![Jet::<f64, 1>::constant(0.0); ni];
+            let zj = vec![Jet::<f64, 1>::constant(0.0); ni];
+            let mut mj = vec![Jet::<f64, 1>::constant(0.0); ni * ni];
+            let mut kj = vec![Jet::<f64, 1>::constant(0.0); ni * ni];
+            let mut cj = vec![Jet::<f64, 1>::constant(0.0); ni];
+            for col in 0..ni {
+                for i in 0..ni {
+                    qj[i] = Jet { v: q[i], d: [if i == col { 1.0 } else { 0.0 }] };
+                }
+                self.reduced(false, Jet::constant(0.0), &qj, &zj, &zj, &mut mj, &mut kj, &mut cj);
+                for row in 0..ni {
+                    jac[row * ni + col] = cj[row].d[0];
+                }
+            }
+            let mut step: Vec<f64> = c.iter().map(|x| -x).collect();
+            if !solve_in_place(&mut jac, &mut step, ni) {
+                return Err(ModelError::NoEquilibrium("the static stiffness matrix is singular (is every coordinate restrained by gravity, a spring or the Earth's rotation?)".into()));
+            }
+            // Damped Newton: halve until the residual decreases.
+            let mut lambda = 1.0;
+            loop {
+                let trial: Vec<f64> = q.iter().zip(&step).map(|(a, b)| a + lambda * b).collect();
+                residual(&trial, &mut c, &mut m, &mut k);
+                let tn = c.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if tn < norm || lambda < 1e-6 {
+                    q = trial;
+                    norm = tn;
+                    break;
+                }
+                lambda *= 0.5;
+            }
+            if norm <= 1e-13 * scale || step.iter().all(|s| s.abs() < 1e-15) {
+                return Ok(q);
+            }
+        }
+        if norm <= 1e-9 * scale {
+            Ok(q)
+        } else {
+            Err(ModelError::NoEquilibrium(format!("Newton's method stalled with residual {norm:.3e} N·m")))
+        }
+    }
+
+    /// Precessional coordinates: rows of the gyroscopic (skew) part of K at rest.
+    fn find_precessional(&self, x: &[f64]) -> Vec<bool> {
+        let ni = self.independent.len();
+        let mut m = vec![0.0; ni * ni];
+        let mut k = vec![0.0; ni * ni];
+        let mut c = vec![0.0; ni];
+        let zero = vec![0.0; ni];
+        self.reduced(false, 0.0, &x[..ni], &zero, &zero, &mut m, &mut k, &mut c);
+        let skew = |i: usize, j: usize| 0.5 * (k[i * ni + j] - k[j * ni + i]);
+        let big = (0..ni).flat_map(|i| (0..ni).map(move |j| (i, j))).map(|(i, j)| skew(i, j).abs()).fold(0.0, f64::max);
+        if big == 0.0 {
+            return vec![false; ni];
+        }
+        (0..ni).map(|i| (0..ni).any(|j| skew(i, j).abs() > 1e-3 * big)).collect()
+    }
+
+    /// Sets the momentum of free rotors from a state: relative spin plus the carrier's rate.
+    fn update_free_rotors(&mut self, x_full_layout: &[f64]) {
+        let ni = self.independent.len();
+        if !self.design.bodies.iter().any(|b| b.rotor.as_ref().is_some_and(|r| r.mode == SpinMode::Free)) {
+            return;
+        }
+        let n = self.chain.n;
+        let mut q = vec![0.0; n];
+        let mut qd = vec![0.0; n];
+        self.expand(&x_full_layout[..ni], &mut q, true);
+        self.expand(&x_full_layout[ni..2 * ni], &mut qd, false);
+        let (r, w, _) = self.base_at(0.0f64);
+        let rr = M3(r.0.map(|row| row.map(|x| x.v)));
+        let wv = V3(w.0.map(|x| x.v));
+        let rates = crate::engine::body_angular_velocities(&self.chain, &q, &qd, &rr, &wv);
+        for (bi, b) in self.design.bodies.iter().enumerate() {
+            if let Some(rot) = &b.rotor {
+                if rot.mode == SpinMode::Free {
+                    let poses = body_poses(&self.chain, &q, &rr);
+                    let s = M3(poses[bi].0).mul_v(&V3(rot.axis));
+                    let carrier = s.dot(&V3(rates[bi]));
+                    self.spin_momentum[bi] = rot.polar_inertia_kg_m2 * (rot.spin_rad_per_s + carrier);
+                }
+            }
+        }
+    }
+
+    /// Rates of all independent coordinates at a state (for gyroscopic fidelity they come from
+    /// the precession equations).
+    pub fn rates(&self, t: f64, x: &[f64]) -> Vec<f64> {
+        let ni = self.independent.len();
+        match self.fidelity {
+            Fidelity::Gyroscopic => {
+                let mut dx = vec![0.0; self.dim()];
+                self.rhs(t, x, &mut dx);
+                dx[..ni].to_vec()
+            }
+            _ => x[ni..2 * ni].to_vec(),
+        }
+    }
+
+    /// All coordinates and rates (servo-driven included) at a state.
+    pub fn full_coordinates(&self, t: f64, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let n = self.chain.n;
+        let ni = self.independent.len();
+        let mut q = vec![0.0; n];
+        let mut qd = vec![0.0; n];
+        self.expand(&x[..ni], &mut q, true);
+        let r = self.rates(t, x);
+        self.expand(&r, &mut qd, false);
+        (q, qd)
+    }
+
+    /// world_from_base at time t (f64).
+    pub fn world_from_base(&self, t: f64) -> [[f64; 3]; 3] {
+        let (r, _, _) = self.base_at(t);
+        r.0.map(|row| row.map(|x| x.v))
+    }
+
+    /// Apparent gravity at the pivot, world axes.
+    pub fn apparent_gravity(&self, t: f64) -> [f64; 3] {
+        self.base_at(t).2
+    }
+
+    /// Poses of all bodies: (world_from_body rotation, origin relative to pivot) at a state.
+    pub fn body_poses(&self, t: f64, q_full: &[f64]) -> Vec<([[f64; 3]; 3], [f64; 3])> {
+        body_poses(&self.chain, q_full, &M3(self.world_from_base(t)))
+    }
+
+    /// The compass reading at a state.
+    pub fn readout(&self, t: f64, x: &[f64]) -> Readout {
+        let (q, qd) = self.full_coordinates(t, x);
+        let poses = self.body_poses(t, &q);
+        let s = M3(poses[self.design.reading_body].0).mul_v(&V3(self.design.reading_axis));
+        let err = s.0[1].atan2(s.0[0]);
+        let tilt = (-s.0[2]).clamp(-1.0, 1.0).asin();
+        let k = self.motion.kinematics(t);
+        let true_heading = k.heading_rad.rem_euclid(std::f64::consts::TAU);
+        Readout {
+            reading_error_rad: err,
+            tilt_rad: tilt,
+            true_heading_rad: true_heading,
+            compass_heading_rad: (true_heading + err).rem_euclid(std::f64::consts::TAU),
+            q,
+            qd,
+        }
+    }
+
+    /// Index (full) of the coordinate with a role.
+    pub fn role(&self, role: CoordinateRole) -> Option<usize> {
+        self.design.role_index(role)
+    }
+
+    /// Eigenvalues of the linearisation at equilibrium (full fidelity), (re, im) in 1/s.
+    pub fn modes(&self) -> Vec<(f64, f64)> {
+        let ni = self.independent.len();
+        let dim = 2 * ni;
+        let mut a = vec![0.0; dim * dim];
+        self.jacobian_at(Fidelity::Full, 0.0, &self.x_equilibrium, &mut a);
+        linalg::eigenvalues(&a, dim)
+    }
+}
+

@@ -1,0 +1,278 @@
+//! Closed forms of the reference texts, computed from a design's own parameters. These are the
+//! checks the engine is held to (the engine never uses them to move anything).
+//!
+//! Sources: `shared/physics/foucault-villarceau.md` (Villarceau 1855, eqs. 42–47) and
+//! `shared/physics/anschutz-1906.md` (Beghin ch. II–III, eqs. 10, 18, 19–22, §30, §40).
+
+use crate::constants::{EARTH_RADIUS_M, EARTH_RATE_RAD_PER_S, STANDARD_GRAVITY_M_PER_S2};
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+
+/// Villarceau's pendulum form of Foucault's gyroscope: γ″ = (g/a)(−sin γ + 2δ sin γ cos γ).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Villarceau {
+    /// g/a, 1/s² (negative when n < 0: the ring then oscillates about γ = π).
+    pub g_over_a: f64,
+    pub delta: f64,
+}
+
+/// Inputs of Villarceau's equation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VillarceauInputs {
+    /// Torus transverse moment A, polar moment C, kg·m².
+    pub a: f64,
+    pub c: f64,
+    /// Ring principal moments: A′ about the normal to the ring's plane (the plane of ring axis and
+    /// torus axis), B′ about the in-plane axis ⟂ to the ring axis, C′ about the ring axis. (Read
+    /// off eq. 46: the torus's A sin²η carries A′'s sign, and the engine's energy agrees.)
+    pub a_ring: f64,
+    pub b_ring: f64,
+    pub c_ring: f64,
+    /// Absolute spin of the torus about its axis, rad/s (eq. 42: n = w + ω cos θ₀).
+    pub n: f64,
+    /// Earth rate ω, rad/s.
+    pub omega: f64,
+    /// Polar distance θ′ of the ring axis, rad.
+    pub theta_ring: f64,
+    /// Angle η between torus axis and ring axis, rad.
+    pub eta: f64,
+}
+
+impl Villarceau {
+    /// Eqs. 45–46.
+    pub fn new(p: &VillarceauInputs) -> Villarceau {
+        let (se, ce) = p.eta.sin_cos();
+        let (st, ct) = p.theta_ring.sin_cos();
+        let k = p.c * p.n - p.a * p.omega * ce * ct;
+        let inertia = p.a * se * se + p.c_ring;
+        Villarceau {
+            g_over_a: p.omega * st * se * k / inertia,
+            delta: 0.5 * (p.omega * st / se) * (p.a * se * se + p.a_ring - p.b_ring) / k,
+        }
+    }
+
+    /// The centre of oscillation: 0 for n > 0, π for n < 0.
+    pub fn centre(&self) -> f64 {
+        if self.g_over_a >= 0.0 { 0.0 } else { PI }
+    }
+
+    /// γ″ at γ (eq. 44 bis divided through).
+    pub fn acceleration(&self, gamma: f64) -> f64 {
+        self.g_over_a * (-gamma.sin() + 2.0 * self.delta * gamma.sin() * gamma.cos())
+    }
+
+    /// The first integral γ′² − (2g/a)(cos γ − δ cos²γ), constant along motions (eq. 47).
+    pub fn first_integral(&self, gamma: f64, gamma_rate: f64) -> f64 {
+        let c = gamma.cos();
+        gamma_rate * gamma_rate - 2.0 * self.g_over_a * (c - self.delta * c * c)
+    }
+
+    /// Period of the oscillation with turning point at γ₀ measured from the centre
+    /// (0 < |γ₀| < π): the quadrature of eq. 47 with sin(γ/2) = sin(γ₀/2) sin φ.
+    pub fn period(&self, amplitude_rad: f64) -> f64 {
+        let (w2, delta) = if self.g_over_a >= 0.0 { (self.g_over_a, self.delta) } else { (-self.g_over_a, -self.delta) };
+        let k = (amplitude_rad.abs() / 2.0).sin();
+        let c0 = amplitude_rad.cos();
+        let f = |phi: f64| {
+            let s = k * phi.sin();
+            let cg = 1.0 - 2.0 * s * s;
+            1.0 / ((1.0 - s * s).sqrt() * (1.0 - delta * (cg + c0)).sqrt())
+        };
+        4.0 / w2.sqrt() * integrate(&f, 0.0, FRAC_PI_2, 1e-14)
+    }
+
+    /// Small-amplitude period 2π/√((g/a)(1 − 2δ)).
+    pub fn small_amplitude_period(&self) -> f64 {
+        let (w2, delta) = if self.g_over_a >= 0.0 { (self.g_over_a, self.delta) } else { (-self.g_over_a, -self.delta) };
+        TAU / (w2 * (1.0 - 2.0 * delta)).sqrt()
+    }
+}
+
+/// Adaptive Gauss–Kronrod (7–15) quadrature to a relative tolerance.
+pub fn integrate(f: &dyn Fn(f64) -> f64, a: f64, b: f64, rel_tol: f64) -> f64 {
+    const XGK: [f64; 8] = [
+        0.991_455_371_120_812_6,
+        0.949_107_912_342_758_5,
+        0.864_864_423_359_769_1,
+        0.741_531_185_599_394_4,
+        0.586_087_235_467_691_1,
+        0.405_845_151_377_397_2,
+        0.207_784_955_007_898_5,
+        0.0,
+    ];
+    const WGK: [f64; 8] = [
+        0.022_935_322_010_529_22,
+        0.063_092_092_629_978_55,
+        0.104_790_010_322_250_2,
+        0.140_653_259_715_525_9,
+        0.169_004_726_639_267_9,
+        0.190_350_578_064_785_4,
+        0.204_432_940_075_298_9,
+        0.209_482_141_084_728_8,
+    ];
+    const WG: [f64; 4] = [
+        0.129_484_966_168_869_7,
+        0.279_705_391_489_276_7,
+        0.381_830_050_505_118_9,
+        0.417_959_183_673_469_4,
+    ];
+    fn gk(f: &dyn Fn(f64) -> f64, a: f64, b: f64) -> (f64, f64) {
+        let c = 0.5 * (a + b);
+        let h = 0.5 * (b - a);
+        let fc = f(c);
+        let mut k = WGK[7] * fc;
+        let mut g = WG[3] * fc;
+        for j in 0..7 {
+            let x = h * XGK[j];
+            let s = f(c - x) + f(c + x);
+            k += WGK[j] * s;
+            if j % 2 == 1 {
+                g += WG[j / 2] * s;
+            }
+        }
+        (k * h, ((k - g) * h).abs())
+    }
+    let mut stack = vec![(a, b)];
+    let mut total = 0.0;
+    let whole = gk(f, a, b).0.abs().max(1e-300);
+    let mut guard = 0;
+    while let Some((x0, x1)) = stack.pop() {
+        let (v, e) = gk(f, x0, x1);
+        guard += 1;
+        if e <= rel_tol * whole * (x1 - x0) / (b - a) || guard > 100_000 || (x1 - x0) < 1e-15 * (b - a) {
+            total += v;
+        } else {
+            let m = 0.5 * (x0 + x1);
+            stack.push((x0, m));
+            stack.push((m, x1));
+        }
+    }
+    total
+}
+
+/// Beghin's elementary and precise Anschütz constants, SI.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Anschutz {
+    /// Spin momentum IΩ, N·m·s.
+    pub spin_momentum: f64,
+    /// Pendulous moment aP, N·m.
+    pub pendulous_moment: f64,
+    /// Damper constant κ = f(c + k), N·m.
+    pub kappa: f64,
+    /// ℭ (about the vertical) and 𝔅 (about the East–West axis), kg·m².
+    pub inertia_vertical: f64,
+    pub inertia_east_west: f64,
+    pub latitude_rad: f64,
+}
+
+impl Anschutz {
+    /// τ = IΩε cos L.
+    pub fn tau(&self) -> f64 {
+        self.spin_momentum * EARTH_RATE_RAD_PER_S * self.latitude_rad.cos()
+    }
+    /// Undamped small-amplitude period (eq. 10): 2π√(IΩ/(aPε cos L)).
+    pub fn undamped_period(&self) -> f64 {
+        TAU * (self.spin_momentum / (self.pendulous_moment * EARTH_RATE_RAD_PER_S * self.latitude_rad.cos())).sqrt()
+    }
+    /// Roots of (ℭr² + τ)(𝔅r² + aP) + IΩr(IΩr + κ) = 0, slow pair first, each polished by Newton.
+    pub fn characteristic_roots(&self) -> [(f64, f64); 4] {
+        let (c, b, h, k, ap, tau) =
+            (self.inertia_vertical, self.inertia_east_west, self.spin_momentum, self.kappa, self.pendulous_moment, self.tau());
+        // c4 r⁴ + c2 r² + c1 r + c0
+        let coef = [tau * ap, h * k, c * ap + b * tau + h * h, 0.0, c * b];
+        let mut roots = polynomial_roots(&coef);
+        roots.sort_by(|x, y| (x.0 * x.0 + x.1 * x.1).total_cmp(&(y.0 * y.0 + y.1 * y.1)));
+        [roots[0], roots[1], roots[2], roots[3]]
+    }
+    /// Latitude at which the tilt of the oscillation turns into revolution: θ_max = 2√(τ/aP).
+    pub fn revolution_threshold_tilt(&self) -> f64 {
+        2.0 * (self.tau() / self.pendulous_moment).sqrt()
+    }
+}
+
+/// Roots of Σ cᵢ rⁱ (coefficients lowest first) as (re, im), by the companion matrix, then
+/// polished by complex Newton on the polynomial (so tiny roots next to huge ones keep their
+/// relative accuracy).
+pub fn polynomial_roots(c: &[f64]) -> Vec<(f64, f64)> {
+    let deg = c.len() - 1;
+    let lead = c[deg];
+    let mut comp = vec![0.0; deg * deg];
+    for i in 1..deg {
+        comp[i * deg + i - 1] = 1.0;
+    }
+    for i in 0..deg {
+        comp[i * deg + deg - 1] = -c[i] / lead;
+    }
+    let mut roots = crate::linalg::eigenvalues(&comp, deg);
+    for r in roots.iter_mut() {
+        for _ in 0..50 {
+            // Horner in complex arithmetic for p and p'.
+            let (mut p, mut dp) = ((0.0, 0.0), (0.0, 0.0));
+            for &ci in c.iter().rev() {
+                dp = cadd(cmul(dp, *r), p);
+                p = cadd(cmul(p, *r), (ci, 0.0));
+            }
+            let d = dp.0 * dp.0 + dp.1 * dp.1;
+            if d == 0.0 {
+                break;
+            }
+            let step = ((p.0 * dp.0 + p.1 * dp.1) / d, (p.1 * dp.0 - p.0 * dp.1) / d);
+            r.0 -= step.0;
+            r.1 -= step.1;
+            if step.0.hypot(step.1) <= 1e-16 * r.0.hypot(r.1) {
+                break;
+            }
+        }
+    }
+    roots
+}
+
+fn cmul(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
+    (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0)
+}
+fn cadd(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
+    (a.0 + b.0, a.1 + b.1)
+}
+
+/// Speed error (Beghin §30): tan ζ = v cos α / (V cos L − v sin α), V = εR, α the course
+/// measured toward West (so v sin α is the westward speed). Returned as ζ (West positive).
+pub fn speed_error_rad(speed_m_per_s: f64, heading_rad: f64, latitude_rad: f64) -> f64 {
+    let v_north = speed_m_per_s * heading_rad.cos();
+    let v_west = -speed_m_per_s * heading_rad.sin();
+    let v_surface = EARTH_RATE_RAD_PER_S * EARTH_RADIUS_M * latitude_rad.cos();
+    // The spin axis settles along the horizontal absolute rate of the local frame,
+    // (ε cos L − v_W/R, v_N/R) in (North, West): West of North on northerly courses.
+    v_north.atan2(v_surface - v_west)
+}
+
+/// Schuler tuning: the spin momentum that makes an Anschütz compass's period 2π√(R/g).
+pub fn schuler_spin_momentum(pendulous_moment: f64, latitude_rad: f64) -> f64 {
+    pendulous_moment * EARTH_RATE_RAD_PER_S * latitude_rad.cos() * EARTH_RADIUS_M / STANDARD_GRAVITY_M_PER_S2
+}
+
+/// Mean reading error under rolling (Beghin §40, corrected): τζ₀ = −½ sinΔ cosΔ (J₀/g)² aP.
+/// Returned as the magnitude ½ |sinΔ cosΔ| (J₀/g)² aP/τ, rad.
+pub fn rolling_error_magnitude_rad(j0_m_per_s2: f64, roll_plane_azimuth_rad: f64, pendulous_moment: f64, tau: f64) -> f64 {
+    let r = j0_m_per_s2 / STANDARD_GRAVITY_M_PER_S2;
+    0.5 * (roll_plane_azimuth_rad.sin() * roll_plane_azimuth_rad.cos()).abs() * r * r * pendulous_moment / tau
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pendulum_period_matches_the_elliptic_integral() {
+        // δ = 0: T = 4K(k)/√(g/a); K(sin 45°) = 1.854074677301372.
+        let v = Villarceau { g_over_a: 4.0, delta: 0.0 };
+        let t = v.period(PI / 2.0);
+        assert!((t - 4.0 * 1.854_074_677_301_372 / 2.0).abs() < 1e-13);
+    }
+
+    #[test]
+    fn quartic_roots_are_polished() {
+        // (r² + 1e-6)(r² + 1e6) = r⁴ + (1e6 + 1e-6) r² + 1
+        let roots = polynomial_roots(&[1.0, 0.0, 1e6 + 1e-6, 0.0, 1.0]);
+        let small = roots.iter().map(|r| r.1.abs()).fold(f64::INFINITY, f64::min);
+        assert!((small - 1e-3).abs() < 1e-15);
+    }
+}
