@@ -64,15 +64,7 @@ pub enum Shape {
 #[serde(deny_unknown_fields)]
 struct RotationFile {
     axis: String,
-    /// A number, or an expression of the design's parameters (in degrees).
-    angle_deg: NumberOrExpr,
-}
-
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(untagged)]
-enum NumberOrExpr {
-    Number(f64),
-    Expr(String),
+    angle_deg: f64,
 }
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -282,29 +274,27 @@ impl Design {
         text: &str,
         overrides: &[(String, toml::Value)],
     ) -> Result<Design, InputError> {
-        // First pass on the text itself, so unknown keys and type errors carry a line number.
-        let parsed: DesignFile =
+        let mut value: toml::Value =
             toml::from_str(text).map_err(|e| crate::error::from_toml(file, text, &e))?;
-        let parsed = if overrides.is_empty() {
-            parsed
-        } else {
-            let mut value: toml::Value =
-                toml::from_str(text).map_err(|e| crate::error::from_toml(file, text, &e))?;
-            for (path, v) in overrides {
-                apply_override(&mut value, path, v.clone()).map_err(|m| InputError {
-                    file: format!("{file} (override)"),
-                    line: None,
-                    key: path.clone(),
-                    message: m,
-                })?;
-            }
-            value.try_into().map_err(|e: toml::de::Error| InputError {
-                file: format!("{file} (after overrides)"),
+        for (path, v) in overrides {
+            apply_override(&mut value, path, v.clone()).map_err(|m| InputError {
+                file: format!("{file} (override)"),
                 line: None,
-                key: "(design)".into(),
-                message: e.message().to_string(),
-            })?
-        };
+                key: path.clone(),
+                message: m,
+            })?;
+        }
+        resolve_expressions(&mut value).map_err(|(key, message)| InputError {
+            file: file.to_string(),
+            line: locate(text, None, key.rsplit('.').next().unwrap_or(&key)),
+            key,
+            message,
+        })?;
+        let parsed: DesignFile = value.try_into().map_err(|e: toml::de::Error| {
+            let message = e.message().to_string();
+            let key = message.split('`').nth(1).unwrap_or("(design)").to_string();
+            InputError { file: file.to_string(), line: locate(text, None, &key), key, message }
+        })?;
         build(file, text, parsed)
     }
 
@@ -325,6 +315,63 @@ impl Design {
     pub fn parameter(&self, name: &str) -> Option<f64> {
         self.parameters.get(name).copied()
     }
+}
+
+/// Evaluates the `[parameters]` table in order (numbers, or `"= expression"` of the parameters
+/// before it), then replaces every `"= expression"` string elsewhere by its value. Hinge angles
+/// and other relations stay strings (they are expressions of the coordinates, parsed later).
+fn resolve_expressions(doc: &mut toml::Value) -> Result<(), (String, String)> {
+    let mut params: BTreeMap<String, f64> = BTreeMap::new();
+    if let Some(toml::Value::Table(t)) = doc.get_mut("parameters") {
+        for (k, v) in t.iter_mut() {
+            let x = match v {
+                toml::Value::Float(x) => *x,
+                toml::Value::Integer(i) => *i as f64,
+                toml::Value::String(s) if s.trim_start().starts_with('=') => {
+                    let e = expr::parse(s.trim_start()[1..].trim(), &[], &params)
+                        .map_err(|m| (format!("parameters.{k}"), m))?;
+                    e.constant
+                }
+                _ => return Err((format!("parameters.{k}"), "must be a number or \"= expression\" of earlier parameters".into())),
+            };
+            if !x.is_finite() {
+                return Err((format!("parameters.{k}"), format!("evaluates to {x} (allowed: finite)")));
+            }
+            params.insert(k.clone(), x);
+            *v = toml::Value::Float(x);
+        }
+    }
+    fn walk(v: &mut toml::Value, path: &str, params: &BTreeMap<String, f64>) -> Result<(), (String, String)> {
+        match v {
+            toml::Value::String(s) if s.trim_start().starts_with('=') => {
+                let e = expr::parse(s.trim_start()[1..].trim(), &[], params).map_err(|m| (path.to_string(), m))?;
+                if !e.constant.is_finite() {
+                    return Err((path.to_string(), format!("evaluates to {} (allowed: finite)", e.constant)));
+                }
+                *v = toml::Value::Float(e.constant);
+            }
+            toml::Value::Table(t) => {
+                for (k, x) in t.iter_mut() {
+                    if path.is_empty() && k == "parameters" {
+                        continue;
+                    }
+                    let name = x.get("name").and_then(|n| n.as_str()).map(str::to_string);
+                    let p = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+                    let _ = name;
+                    walk(x, &p, params)?;
+                }
+            }
+            toml::Value::Array(a) => {
+                for (i, x) in a.iter_mut().enumerate() {
+                    let label = x.get("name").and_then(|n| n.as_str()).map_or(i.to_string(), str::to_string);
+                    walk(x, &format!("{path}.{label}"), params)?;
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+    walk(doc, "", &params)
 }
 
 /// Applies `path = value` to a TOML document; arrays of tables are addressed by their `name`.
@@ -487,13 +534,7 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
         let mut rot = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         for r in &b.joint_rotation {
             let ax = axis_index(&r.axis).ok_or_else(|| err(a, "axis", path("joint_rotation.axis"), format!("unknown axis `{}` (allowed: x, y, z)", r.axis)))?;
-            let angle_deg = match &r.angle_deg {
-                NumberOrExpr::Number(x) => *x,
-                NumberOrExpr::Expr(e) => {
-                    let q = expr::parse(e, &[], &f.parameters).map_err(|m| err(a, "angle_deg", path("joint_rotation.angle_deg"), format!("{m} (joint rotations may use parameters only)")))?;
-                    q.constant
-                }
-            };
+            let angle_deg = r.angle_deg;
             if !angle_deg.is_finite() {
                 return Err(err(a, "angle_deg", path("joint_rotation.angle_deg"), "must be finite".into()));
             }

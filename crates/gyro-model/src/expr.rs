@@ -5,7 +5,8 @@
 //! e.g. Beghin's roller contact φ − θ = (ζ − ξ)(α − ρ)). Keeping them polynomial lets the engine
 //! evaluate them and their exact gradients on dual numbers without a general symbolic system.
 //! Named parameters (constants of the design) may appear anywhere; `pi` is predefined, and
-//! `deg(x)` converts degrees to radians.
+//! `deg(x)` converts degrees to radians; `sqrt`, `sin`, `cos`, `abs` apply to constants; `g`,
+//! `earth_rate` and `earth_radius` are the constants of `constants`.
 
 use crate::real::Real;
 use std::collections::BTreeMap;
@@ -192,6 +193,18 @@ fn tokenize(s: &str) -> Result<Vec<Tok>, String> {
     Ok(out)
 }
 
+/// Constants every expression may use (shadowed by coordinates and parameters of the same name).
+pub fn builtin(name: &str) -> Option<f64> {
+    use crate::constants::*;
+    Some(match name {
+        "pi" => std::f64::consts::PI,
+        "g" => STANDARD_GRAVITY_M_PER_S2,
+        "earth_rate" => EARTH_RATE_RAD_PER_S,
+        "earth_radius" => EARTH_RADIUS_M,
+        _ => return None,
+    })
+}
+
 struct Parser<'a> {
     tokens: Vec<Tok>,
     pos: usize,
@@ -255,7 +268,7 @@ impl Parser<'_> {
                 Ok(e)
             }
             Tok::Ident(name) => {
-                if name == "deg" || name == "sin" || name == "cos" {
+                if matches!(name.as_str(), "deg" | "sin" | "cos" | "sqrt" | "abs") {
                     if self.peek() != Some(&Tok::Op('(')) {
                         return Err(format!("`{name}` needs an argument in parentheses"));
                     }
@@ -264,20 +277,25 @@ impl Parser<'_> {
                         return Err(format!("`{name}(…)` takes constants only"));
                     }
                     let x = arg.constant;
+                    if name == "sqrt" && x < 0.0 {
+                        return Err(format!("sqrt of a negative number ({x})"));
+                    }
                     return Ok(QuadExpr::constant(match name.as_str() {
                         "deg" => x.to_radians(),
                         "sin" => x.sin(),
-                        _ => x.cos(),
+                        "cos" => x.cos(),
+                        "sqrt" => x.sqrt(),
+                        _ => x.abs(),
                     }));
-                }
-                if name == "pi" {
-                    return Ok(QuadExpr::constant(std::f64::consts::PI));
                 }
                 if let Some(i) = self.coordinates.iter().position(|c| *c == name) {
                     return Ok(QuadExpr::coordinate(i));
                 }
                 if let Some(v) = self.parameters.get(&name) {
                     return Ok(QuadExpr::constant(*v));
+                }
+                if let Some(v) = builtin(&name) {
+                    return Ok(QuadExpr::constant(v));
                 }
                 Err(format!(
                     "unknown name `{name}` (coordinates: {}; parameters: {})",
