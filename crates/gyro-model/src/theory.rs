@@ -276,3 +276,39 @@ mod tests {
         assert!((small - 1e-3).abs() < 1e-15);
     }
 }
+
+/// Villarceau's constants for a design built like the shipped `foucault-gyroscope` (a body
+/// `ring` hinged about its z axis on the base, carrying a body `torus` with a rotor), from the
+/// design's own numbers and the model's spin momentum, at a latitude. Also returns the hinge
+/// angle of the hour plane (Villarceau's γ = hinge angle − offset).
+pub fn foucault_villarceau(design: &crate::Design, torus_spin_momentum: f64, latitude_rad: f64) -> Option<(Villarceau, f64)> {
+    let ring = &design.bodies[design.body_index("ring")?];
+    let torus = &design.bodies[design.body_index("torus")?];
+    let rotor = torus.rotor.as_ref()?;
+    let jr = ring.joint_rotation;
+    let col = |j: usize| [jr[0][j], jr[1][j], jr[2][j]];
+    let (x, y, z) = (col(0), col(1), col(2));
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let e = [latitude_rad.cos(), 0.0, latitude_rad.sin()];
+    let cos_tp = dot(z, e);
+    let ex = [e[0] - cos_tp * z[0], e[1] - cos_tp * z[1], e[2] - cos_tp * z[2]];
+    let offset = dot(ex, y).atan2(dot(ex, x));
+    // The torus axis in ring axes: angle η from the ring axis.
+    let tj = torus.joint_rotation;
+    let a_ring = [tj[0][0] * rotor.axis[0] + tj[0][1] * rotor.axis[1] + tj[0][2] * rotor.axis[2], 0.0, tj[2][0] * rotor.axis[0] + tj[2][1] * rotor.axis[1] + tj[2][2] * rotor.axis[2]];
+    let eta = a_ring[0].atan2(a_ring[2]);
+    let v = Villarceau::new(&VillarceauInputs {
+        a: torus.inertia_kg_m2[0][0],
+        c: rotor.polar_inertia_kg_m2,
+        // A′ about the normal of the ring's plane (ring y), B′ in the plane (ring x): see
+        // `VillarceauInputs`.
+        a_ring: ring.inertia_kg_m2[1][1],
+        b_ring: ring.inertia_kg_m2[0][0],
+        c_ring: ring.inertia_kg_m2[2][2],
+        n: torus_spin_momentum / rotor.polar_inertia_kg_m2,
+        omega: EARTH_RATE_RAD_PER_S,
+        theta_ring: cos_tp.clamp(-1.0, 1.0).acos(),
+        eta,
+    });
+    Some((v, offset))
+}

@@ -1,0 +1,67 @@
+//! The shipped library of scenes and designs. The files live in `scenes/` and `designs/` at the
+//! repository root and are also compiled into the program, so `gyrolab run harbour-50n` works
+//! from any directory. A path always wins over a shipped name.
+
+use gyro_model::InputError;
+use std::path::{Path, PathBuf};
+
+macro_rules! shipped {
+    ($folder:literal; $($name:literal),* $(,)?) => {
+        &[$(($name, include_str!(concat!("../../../", $folder, "/", $name, ".toml")))),*]
+    };
+}
+
+/// Shipped designs: (name, TOML text).
+pub const DESIGNS: &[(&str, &str)] = shipped!("designs"; "foucault-gyroscope", "anschutz-1906");
+
+/// Shipped scenes: (name, TOML text).
+pub const SCENES: &[(&str, &str)] = shipped!("scenes";
+    "harbour-0n", "harbour-30n", "harbour-50n", "harbour-70n",
+    "run-north-30kn", "speed-change-20kn", "turn-90", "turn-180", "zigzag-45",
+    "rolling-cardinal", "rolling-intercardinal",
+    "foucault-azimuth-45n", "foucault-latitude-45n",
+);
+
+/// One-line description of a TOML file (its `description` key).
+pub fn describe(text: &str) -> String {
+    toml::from_str::<toml::Table>(text)
+        .ok()
+        .and_then(|t| t.get("description").and_then(|d| d.as_str()).map(str::to_string))
+        .unwrap_or_default()
+}
+
+fn read(reference: &str, dir: Option<&Path>, folder: &str, shipped: &[(&str, &str)], what: &str) -> Result<(String, String, Option<PathBuf>), InputError> {
+    if let Some(p) = crate::scene::resolve_path(reference, dir, folder) {
+        let text = std::fs::read_to_string(&p).map_err(|e| InputError {
+            file: p.display().to_string(),
+            line: None,
+            key: "(file)".into(),
+            message: format!("cannot read: {e}"),
+        })?;
+        let parent = p.parent().map(Path::to_path_buf);
+        return Ok((p.display().to_string(), text, parent));
+    }
+    if let Some((name, text)) = shipped.iter().find(|(n, _)| *n == reference) {
+        return Ok((format!("<shipped {what} {name}>"), text.to_string(), None));
+    }
+    Err(InputError {
+        file: reference.to_string(),
+        line: None,
+        key: "(file)".into(),
+        message: format!(
+            "no such file, and no shipped {what} of that name (shipped: {})",
+            shipped.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+        ),
+    })
+}
+
+/// Reads a scene by path or shipped name: (label for errors, text, directory for relative refs).
+pub fn read_scene(reference: &str) -> Result<(String, String, Option<PathBuf>), InputError> {
+    read(reference, None, "scenes", SCENES, "scene")
+}
+
+/// Reads a design by path (relative to the scene's folder, or `../designs/NAME.toml` from it, or
+/// `designs/NAME.toml` here) or shipped name.
+pub fn read_design(reference: &str, scene_dir: Option<&Path>) -> Result<(String, String), InputError> {
+    read(reference, scene_dir, "designs", DESIGNS, "design").map(|(l, t, _)| (l, t))
+}

@@ -1,0 +1,63 @@
+//! Helpers shared by the physics tests: load shipped scenes with overrides, run them in memory,
+//! locate crossings in sampled output.
+#![allow(dead_code)]
+
+use gyro_sim::solvers::{Method, Tolerances};
+use gyro_sim::{Scene, SceneOverrides, Simulation};
+use std::ops::ControlFlow;
+
+pub fn scene_text(name: &str) -> String {
+    std::fs::read_to_string(format!("{}/../../scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"))).expect("shipped scene")
+}
+
+/// Loads a scene from TOML text (designs resolved from the repository's designs/ folder).
+pub fn scene_from(text: &str, ov: &SceneOverrides) -> Scene {
+    let dir = std::path::PathBuf::from(format!("{}/../../scenes", env!("CARGO_MANIFEST_DIR")));
+    match Scene::from_toml("test-scene.toml", text, Some(&dir), ov) {
+        Ok(s) => s,
+        Err(e) => panic!("scene: {e}"),
+    }
+}
+
+/// Runs a scene and returns (t, state) samples.
+pub fn run(scene: &Scene, method: Method, tol: Tolerances) -> (Simulation, Vec<(f64, Vec<f64>)>, gyro_sim::RunStats) {
+    let sim = Simulation::new(scene).unwrap_or_else(|e| panic!("{e}"));
+    let mut out = Vec::new();
+    let stats = sim.run(method, &tol, |t, x| {
+        out.push((t, x.to_vec()));
+        ControlFlow::Continue(())
+    });
+    let stats = stats.unwrap_or_else(|e| panic!("{e}"));
+    (sim, out, stats)
+}
+
+pub fn tol(rtol: f64, atol: f64) -> Tolerances {
+    Tolerances { rtol, atol, max_step_s: f64::INFINITY, initial_step_s: None }
+}
+
+/// Times where y crosses zero upward, from samples of y and its rate (cubic Hermite + bisection).
+pub fn upward_crossings(t: &[f64], y: &[f64], yd: &[f64]) -> Vec<f64> {
+    let mut out = Vec::new();
+    for k in 0..t.len().saturating_sub(1) {
+        if y[k] < 0.0 && y[k + 1] >= 0.0 {
+            let h = t[k + 1] - t[k];
+            let p = |s: f64| {
+                let s2 = s * s;
+                let s3 = s2 * s;
+                (2.0 * s3 - 3.0 * s2 + 1.0) * y[k] + (s3 - 2.0 * s2 + s) * h * yd[k] + (-2.0 * s3 + 3.0 * s2) * y[k + 1] + (s3 - s2) * h * yd[k + 1]
+            };
+            let (mut a, mut b) = (0.0, 1.0);
+            for _ in 0..80 {
+                let m = 0.5 * (a + b);
+                if p(m) < 0.0 { a = m } else { b = m }
+            }
+            out.push(t[k] + 0.5 * (a + b) * h);
+        }
+    }
+    out
+}
+
+/// Mean period from crossing times.
+pub fn mean_period(c: &[f64]) -> f64 {
+    (c[c.len() - 1] - c[0]) / (c.len() - 1) as f64
+}
