@@ -50,13 +50,25 @@ pub struct RotorSpec {
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Shape {
     /// A ring about the body's z axis.
-    Ring { radius_m: f64, width_m: f64 },
+    Ring {
+        radius_m: f64,
+        width_m: f64,
+    },
     /// A disc (rotor) about the body's `axis`.
-    Disc { radius_m: f64, thickness_m: f64 },
-    Box { size_m: [f64; 3] },
-    Sphere { radius_m: f64 },
+    Disc {
+        radius_m: f64,
+        thickness_m: f64,
+    },
+    Box {
+        size_m: [f64; 3],
+    },
+    Sphere {
+        radius_m: f64,
+    },
     /// A ship hull outline (box with a bow).
-    Hull { size_m: [f64; 3] },
+    Hull {
+        size_m: [f64; 3],
+    },
     None,
 }
 
@@ -228,10 +240,30 @@ pub struct Rotor {
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Force {
-    Damper { name: String, expr: QuadExpr, coefficient: f64 },
-    Spring { name: String, expr: QuadExpr, stiffness: f64, rest: f64, preload: f64 },
-    BodyForce { name: String, body: usize, direction: [f64; 3], force_n: f64, point: [QuadExpr; 3] },
-    Generalized { name: String, coordinate: usize, torque: QuadExpr },
+    Damper {
+        name: String,
+        expr: QuadExpr,
+        coefficient: f64,
+    },
+    Spring {
+        name: String,
+        expr: QuadExpr,
+        stiffness: f64,
+        rest: f64,
+        preload: f64,
+    },
+    BodyForce {
+        name: String,
+        body: usize,
+        direction: [f64; 3],
+        force_n: f64,
+        point: [QuadExpr; 3],
+    },
+    Generalized {
+        name: String,
+        coordinate: usize,
+        torque: QuadExpr,
+    },
 }
 
 impl Force {
@@ -293,7 +325,12 @@ impl Design {
         let parsed: DesignFile = value.try_into().map_err(|e: toml::de::Error| {
             let message = e.message().to_string();
             let key = message.split('`').nth(1).unwrap_or("(design)").to_string();
-            InputError { file: file.to_string(), line: locate(text, None, &key), key, message }
+            InputError {
+                file: file.to_string(),
+                line: locate(text, None, &key),
+                key,
+                message,
+            }
         })?;
         build(file, text, parsed)
     }
@@ -332,21 +369,37 @@ fn resolve_expressions(doc: &mut toml::Value) -> Result<(), (String, String)> {
                         .map_err(|m| (format!("parameters.{k}"), m))?;
                     e.constant
                 }
-                _ => return Err((format!("parameters.{k}"), "must be a number or \"= expression\" of earlier parameters".into())),
+                _ => {
+                    return Err((
+                        format!("parameters.{k}"),
+                        "must be a number or \"= expression\" of earlier parameters".into(),
+                    ));
+                }
             };
             if !x.is_finite() {
-                return Err((format!("parameters.{k}"), format!("evaluates to {x} (allowed: finite)")));
+                return Err((
+                    format!("parameters.{k}"),
+                    format!("evaluates to {x} (allowed: finite)"),
+                ));
             }
             params.insert(k.clone(), x);
             *v = toml::Value::Float(x);
         }
     }
-    fn walk(v: &mut toml::Value, path: &str, params: &BTreeMap<String, f64>) -> Result<(), (String, String)> {
+    fn walk(
+        v: &mut toml::Value,
+        path: &str,
+        params: &BTreeMap<String, f64>,
+    ) -> Result<(), (String, String)> {
         match v {
             toml::Value::String(s) if s.trim_start().starts_with('=') => {
-                let e = expr::parse(s.trim_start()[1..].trim(), &[], params).map_err(|m| (path.to_string(), m))?;
+                let e = expr::parse(s.trim_start()[1..].trim(), &[], params)
+                    .map_err(|m| (path.to_string(), m))?;
                 if !e.constant.is_finite() {
-                    return Err((path.to_string(), format!("evaluates to {} (allowed: finite)", e.constant)));
+                    return Err((
+                        path.to_string(),
+                        format!("evaluates to {} (allowed: finite)", e.constant),
+                    ));
                 }
                 *v = toml::Value::Float(e.constant);
             }
@@ -356,14 +409,21 @@ fn resolve_expressions(doc: &mut toml::Value) -> Result<(), (String, String)> {
                         continue;
                     }
                     let name = x.get("name").and_then(|n| n.as_str()).map(str::to_string);
-                    let p = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+                    let p = if path.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{path}.{k}")
+                    };
                     let _ = name;
                     walk(x, &p, params)?;
                 }
             }
             toml::Value::Array(a) => {
                 for (i, x) in a.iter_mut().enumerate() {
-                    let label = x.get("name").and_then(|n| n.as_str()).map_or(i.to_string(), str::to_string);
+                    let label = x
+                        .get("name")
+                        .and_then(|n| n.as_str())
+                        .map_or(i.to_string(), str::to_string);
                     walk(x, &format!("{path}.{label}"), params)?;
                 }
             }
@@ -391,9 +451,9 @@ pub fn apply_override(doc: &mut toml::Value, path: &str, value: toml::Value) -> 
                     return Ok(());
                 }
                 let keys: Vec<String> = t.keys().cloned().collect();
-                cur = t.get_mut(*part).ok_or_else(|| {
-                    format!("no `{part}` here (present: {})", keys.join(", "))
-                })?;
+                cur = t
+                    .get_mut(*part)
+                    .ok_or_else(|| format!("no `{part}` here (present: {})", keys.join(", ")))?;
             }
             toml::Value::Array(a) => {
                 let names: Vec<String> = a
@@ -404,7 +464,9 @@ pub fn apply_override(doc: &mut toml::Value, path: &str, value: toml::Value) -> 
                     .iter()
                     .position(|x| x.get("name").and_then(|n| n.as_str()) == Some(part))
                     .or_else(|| part.parse::<usize>().ok().filter(|i| *i < a.len()))
-                    .ok_or_else(|| format!("no entry named `{part}` (entries: {})", names.join(", ")))?;
+                    .ok_or_else(|| {
+                        format!("no entry named `{part}` (entries: {})", names.join(", "))
+                    })?;
                 if last {
                     a[idx] = value;
                     return Ok(());
@@ -434,20 +496,40 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
         message,
     };
     if f.coordinate.is_empty() {
-        return Err(err(None, "coordinate", "coordinate".into(), "a design needs at least one coordinate".into()));
+        return Err(err(
+            None,
+            "coordinate",
+            "coordinate".into(),
+            "a design needs at least one coordinate".into(),
+        ));
     }
     for (k, v) in &f.parameters {
         if !v.is_finite() {
-            return Err(err(Some("[parameters]"), k, format!("parameters.{k}"), "must be a finite number".into()));
+            return Err(err(
+                Some("[parameters]"),
+                k,
+                format!("parameters.{k}"),
+                "must be a finite number".into(),
+            ));
         }
     }
     let coord_names: Vec<String> = f.coordinate.iter().map(|c| c.name.clone()).collect();
     for (i, c) in f.coordinate.iter().enumerate() {
         if coord_names[..i].contains(&c.name) {
-            return Err(err(Some(&format!("name = \"{}\"", c.name)), "name", format!("coordinate.{}", c.name), "duplicate coordinate name".into()));
+            return Err(err(
+                Some(&format!("name = \"{}\"", c.name)),
+                "name",
+                format!("coordinate.{}", c.name),
+                "duplicate coordinate name".into(),
+            ));
         }
         if f.parameters.contains_key(&c.name) {
-            return Err(err(Some(&format!("name = \"{}\"", c.name)), "name", format!("coordinate.{}", c.name), "a coordinate and a parameter share this name".into()));
+            return Err(err(
+                Some(&format!("name = \"{}\"", c.name)),
+                "name",
+                format!("coordinate.{}", c.name),
+                "a coordinate and a parameter share this name".into(),
+            ));
         }
     }
     let mut coordinates = Vec::new();
@@ -458,35 +540,68 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
             Some("azimuth") => Some(CoordinateRole::Azimuth),
             Some("tilt") => Some(CoordinateRole::Tilt),
             Some(r) => {
-                return Err(err(Some(&anchor), "role", format!("coordinate.{}.role", c.name), format!("unknown role `{r}` (allowed: azimuth, tilt)")));
+                return Err(err(
+                    Some(&anchor),
+                    "role",
+                    format!("coordinate.{}.role", c.name),
+                    format!("unknown role `{r}` (allowed: azimuth, tilt)"),
+                ));
             }
         };
         let servo = match &c.servo {
             None => None,
             Some(s) => {
                 let e = expr::parse(s, &coord_names, &f.parameters).map_err(|m| {
-                    err(Some(&anchor), "servo", format!("coordinate.{}.servo", c.name), m)
+                    err(
+                        Some(&anchor),
+                        "servo",
+                        format!("coordinate.{}.servo", c.name),
+                        m,
+                    )
                 })?;
                 if !e.is_linear() {
-                    return Err(err(Some(&anchor), "servo", format!("coordinate.{}.servo", c.name), "servo relations must be linear in the coordinates".into()));
+                    return Err(err(
+                        Some(&anchor),
+                        "servo",
+                        format!("coordinate.{}.servo", c.name),
+                        "servo relations must be linear in the coordinates".into(),
+                    ));
                 }
                 Some(e)
             }
         };
-        coordinates.push(Coordinate { name: c.name.clone(), description: c.description.clone(), role, servo });
+        coordinates.push(Coordinate {
+            name: c.name.clone(),
+            description: c.description.clone(),
+            role,
+            servo,
+        });
     }
     // A servo relation must read only non-driven coordinates (no chains of servos).
     for c in &coordinates {
         if let Some(s) = &c.servo {
             for i in s.coordinates() {
                 if coordinates[i].servo.is_some() {
-                    return Err(err(Some(&format!("name = \"{}\"", c.name)), "servo", format!("coordinate.{}.servo", c.name), format!("reads `{}`, itself servo-driven (allowed: non-driven coordinates)", coordinates[i].name)));
+                    return Err(err(
+                        Some(&format!("name = \"{}\"", c.name)),
+                        "servo",
+                        format!("coordinate.{}.servo", c.name),
+                        format!(
+                            "reads `{}`, itself servo-driven (allowed: non-driven coordinates)",
+                            coordinates[i].name
+                        ),
+                    ));
                 }
             }
         }
     }
     if coordinates.iter().all(|c| c.servo.is_some()) {
-        return Err(err(None, "coordinate", "coordinate".into(), "every coordinate is servo-driven: nothing left to move".into()));
+        return Err(err(
+            None,
+            "coordinate",
+            "coordinate".into(),
+            "every coordinate is servo-driven: nothing left to move".into(),
+        ));
     }
 
     let body_names: Vec<String> = f.body.iter().map(|b| b.name.clone()).collect();
@@ -496,7 +611,12 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
         let a = Some(anchor.as_str());
         let path = |k: &str| format!("body.{}.{k}", b.name);
         if body_names[..bi].contains(&b.name) || b.name == "base" {
-            return Err(err(a, "name", path("name"), "duplicate body name (and `base` is reserved)".into()));
+            return Err(err(
+                a,
+                "name",
+                path("name"),
+                "duplicate body name (and `base` is reserved)".into(),
+            ));
         }
         let parent = if b.parent == "base" {
             None
@@ -504,7 +624,16 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
             match body_names[..bi].iter().position(|n| *n == b.parent) {
                 Some(p) => Some(p),
                 None => {
-                    return Err(err(a, "parent", path("parent"), format!("unknown parent `{}` (allowed: base or a body listed before this one: {})", b.parent, body_names[..bi].join(", "))));
+                    return Err(err(
+                        a,
+                        "parent",
+                        path("parent"),
+                        format!(
+                            "unknown parent `{}` (allowed: base or a body listed before this one: {})",
+                            b.parent,
+                            body_names[..bi].join(", ")
+                        ),
+                    ));
                 }
             }
         };
@@ -520,31 +649,77 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
         check_finite("inertia_kg_m2", &b.inertia_kg_m2)?;
         check_finite("products_of_inertia_kg_m2", &b.products_of_inertia_kg_m2)?;
         if !(b.mass_kg >= 0.0 && b.mass_kg.is_finite()) {
-            return Err(err(a, "mass_kg", path("mass_kg"), format!("{} is out of range (allowed: ≥ 0 kg)", b.mass_kg)));
+            return Err(err(
+                a,
+                "mass_kg",
+                path("mass_kg"),
+                format!("{} is out of range (allowed: ≥ 0 kg)", b.mass_kg),
+            ));
         }
         let [ixx, iyy, izz] = b.inertia_kg_m2;
         if ixx < 0.0 || iyy < 0.0 || izz < 0.0 {
-            return Err(err(a, "inertia_kg_m2", path("inertia_kg_m2"), format!("{:?} has a negative moment (allowed: ≥ 0 kg·m²)", b.inertia_kg_m2)));
+            return Err(err(
+                a,
+                "inertia_kg_m2",
+                path("inertia_kg_m2"),
+                format!(
+                    "{:?} has a negative moment (allowed: ≥ 0 kg·m²)",
+                    b.inertia_kg_m2
+                ),
+            ));
         }
-        if ixx + iyy < izz * (1.0 - 1e-12) || iyy + izz < ixx * (1.0 - 1e-12) || izz + ixx < iyy * (1.0 - 1e-12) {
-            return Err(err(a, "inertia_kg_m2", path("inertia_kg_m2"), format!("{:?} violates the triangle inequality of principal moments (each ≤ sum of the other two)", b.inertia_kg_m2)));
+        if ixx + iyy < izz * (1.0 - 1e-12)
+            || iyy + izz < ixx * (1.0 - 1e-12)
+            || izz + ixx < iyy * (1.0 - 1e-12)
+        {
+            return Err(err(
+                a,
+                "inertia_kg_m2",
+                path("inertia_kg_m2"),
+                format!(
+                    "{:?} violates the triangle inequality of principal moments (each ≤ sum of the other two)",
+                    b.inertia_kg_m2
+                ),
+            ));
         }
         let [pxy, pxz, pyz] = b.products_of_inertia_kg_m2;
         let inertia = [[ixx, -pxy, -pxz], [-pxy, iyy, -pyz], [-pxz, -pyz, izz]];
         let mut rot = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         for r in &b.joint_rotation {
-            let ax = axis_index(&r.axis).ok_or_else(|| err(a, "axis", path("joint_rotation.axis"), format!("unknown axis `{}` (allowed: x, y, z)", r.axis)))?;
+            let ax = axis_index(&r.axis).ok_or_else(|| {
+                err(
+                    a,
+                    "axis",
+                    path("joint_rotation.axis"),
+                    format!("unknown axis `{}` (allowed: x, y, z)", r.axis),
+                )
+            })?;
             let angle_deg = r.angle_deg;
             if !angle_deg.is_finite() {
-                return Err(err(a, "angle_deg", path("joint_rotation.angle_deg"), "must be finite".into()));
+                return Err(err(
+                    a,
+                    "angle_deg",
+                    path("joint_rotation.angle_deg"),
+                    "must be finite".into(),
+                ));
             }
-            rot = crate::real::M3::<f64>(rot).mul_m(&crate::real::rot_axis(ax, angle_deg.to_radians())).0;
+            rot = crate::real::M3::<f64>(rot)
+                .mul_m(&crate::real::rot_axis(ax, angle_deg.to_radians()))
+                .0;
         }
         let hinge = match &b.hinge {
             None => None,
             Some(h) => {
-                let ax = axis_index(&h.axis).ok_or_else(|| err(a, "axis", path("hinge.axis"), format!("unknown axis `{}` (allowed: x, y, z)", h.axis)))?;
-                let angle = expr::parse(&h.angle_rad, &coord_names, &f.parameters).map_err(|m| err(a, "angle_rad", path("hinge.angle_rad"), m))?;
+                let ax = axis_index(&h.axis).ok_or_else(|| {
+                    err(
+                        a,
+                        "axis",
+                        path("hinge.axis"),
+                        format!("unknown axis `{}` (allowed: x, y, z)", h.axis),
+                    )
+                })?;
+                let angle = expr::parse(&h.angle_rad, &coord_names, &f.parameters)
+                    .map_err(|m| err(a, "angle_rad", path("hinge.angle_rad"), m))?;
                 Some(Hinge { axis: ax, angle })
             }
         };
@@ -553,13 +728,34 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
             Some(r) => {
                 let n = (r.axis[0].powi(2) + r.axis[1].powi(2) + r.axis[2].powi(2)).sqrt();
                 if !(n > 0.0 && n.is_finite()) {
-                    return Err(err(a, "axis", path("rotor.axis"), "must be a non-zero finite vector".into()));
+                    return Err(err(
+                        a,
+                        "axis",
+                        path("rotor.axis"),
+                        "must be a non-zero finite vector".into(),
+                    ));
                 }
                 if !(r.polar_inertia_kg_m2 > 0.0 && r.polar_inertia_kg_m2.is_finite()) {
-                    return Err(err(a, "polar_inertia_kg_m2", path("rotor.polar_inertia_kg_m2"), format!("{} is out of range (allowed: > 0 kg·m²)", r.polar_inertia_kg_m2)));
+                    return Err(err(
+                        a,
+                        "polar_inertia_kg_m2",
+                        path("rotor.polar_inertia_kg_m2"),
+                        format!(
+                            "{} is out of range (allowed: > 0 kg·m²)",
+                            r.polar_inertia_kg_m2
+                        ),
+                    ));
                 }
                 if !(r.spin_rpm.is_finite() && r.spin_rpm != 0.0) {
-                    return Err(err(a, "spin_rpm", path("rotor.spin_rpm"), format!("{} is out of range (allowed: non-zero, finite; negative reverses the spin)", r.spin_rpm)));
+                    return Err(err(
+                        a,
+                        "spin_rpm",
+                        path("rotor.spin_rpm"),
+                        format!(
+                            "{} is out of range (allowed: non-zero, finite; negative reverses the spin)",
+                            r.spin_rpm
+                        ),
+                    ));
                 }
                 Some(Rotor {
                     axis: [r.axis[0] / n, r.axis[1] / n, r.axis[2] / n],
@@ -584,26 +780,53 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
         });
     }
     if bodies.is_empty() {
-        return Err(err(None, "body", "body".into(), "a design needs at least one body".into()));
+        return Err(err(
+            None,
+            "body",
+            "body".into(),
+            "a design needs at least one body".into(),
+        ));
     }
     // Every non-driven coordinate must move something, or its mass matrix row is empty.
     for (i, c) in coordinates.iter().enumerate() {
         if c.servo.is_some() {
             continue;
         }
-        let used = bodies.iter().any(|b| b.hinge.as_ref().is_some_and(|h| h.angle.coordinates().contains(&i)));
+        let used = bodies.iter().any(|b| {
+            b.hinge
+                .as_ref()
+                .is_some_and(|h| h.angle.coordinates().contains(&i))
+        });
         if !used {
-            return Err(err(Some(&format!("name = \"{}\"", c.name)), "name", format!("coordinate.{}", c.name), "no hinge angle uses this coordinate".into()));
+            return Err(err(
+                Some(&format!("name = \"{}\"", c.name)),
+                "name",
+                format!("coordinate.{}", c.name),
+                "no hinge angle uses this coordinate".into(),
+            ));
         }
     }
 
     let mut forces = Vec::new();
     for ff in &f.force {
         let parse_e = |s: &str, name: &str, key: &str| {
-            expr::parse(s, &coord_names, &f.parameters)
-                .map_err(|m| err(Some(&format!("name = \"{name}\"")), key, format!("force.{name}.{key}"), m))
+            expr::parse(s, &coord_names, &f.parameters).map_err(|m| {
+                err(
+                    Some(&format!("name = \"{name}\"")),
+                    key,
+                    format!("force.{name}.{key}"),
+                    m,
+                )
+            })
         };
-        let bad = |name: &str, key: &str, m: String| err(Some(&format!("name = \"{name}\"")), key, format!("force.{name}.{key}"), m);
+        let bad = |name: &str, key: &str, m: String| {
+            err(
+                Some(&format!("name = \"{name}\"")),
+                key,
+                format!("force.{name}.{key}"),
+                m,
+            )
+        };
         forces.push(match ff {
             ForceFile::Damper { name, expr_rad, coefficient_n_m_s_per_rad } => {
                 if !(*coefficient_n_m_s_per_rad >= 0.0 && coefficient_n_m_s_per_rad.is_finite()) {
@@ -634,16 +857,38 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
     }
     for (i, fo) in forces.iter().enumerate() {
         if forces[..i].iter().any(|g| g.name() == fo.name()) {
-            return Err(err(Some(&format!("name = \"{}\"", fo.name())), "name", format!("force.{}", fo.name()), "duplicate force name".into()));
+            return Err(err(
+                Some(&format!("name = \"{}\"", fo.name())),
+                "name",
+                format!("force.{}", fo.name()),
+                "duplicate force name".into(),
+            ));
         }
     }
-    let reading_body = body_names.iter().position(|n| *n == f.reading.body).ok_or_else(|| {
-        err(Some("[reading]"), "body", "reading.body".into(), format!("unknown body `{}` (allowed: {})", f.reading.body, body_names.join(", ")))
-    })?;
+    let reading_body = body_names
+        .iter()
+        .position(|n| *n == f.reading.body)
+        .ok_or_else(|| {
+            err(
+                Some("[reading]"),
+                "body",
+                "reading.body".into(),
+                format!(
+                    "unknown body `{}` (allowed: {})",
+                    f.reading.body,
+                    body_names.join(", ")
+                ),
+            )
+        })?;
     let ra = f.reading.axis;
     let rn = (ra[0] * ra[0] + ra[1] * ra[1] + ra[2] * ra[2]).sqrt();
     if !(rn > 0.0 && rn.is_finite()) {
-        return Err(err(Some("[reading]"), "axis", "reading.axis".into(), "must be a non-zero finite vector".into()));
+        return Err(err(
+            Some("[reading]"),
+            "axis",
+            "reading.axis".into(),
+            "must be a non-zero finite vector".into(),
+        ));
     }
     Ok(Design {
         name: f.name,

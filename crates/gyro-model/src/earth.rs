@@ -111,7 +111,8 @@ pub fn frame_rate<T: Real>(k: &ShipKinematics<T>, fx: &BaseEffects) -> V3<T> {
 pub fn world_from_ship<T: Real>(k: &ShipKinematics<T>, fx: &BaseEffects) -> M3<T> {
     let r = rot_axis(2, -k.heading_rad);
     if fx.roll_pitch {
-        r.rotate_about_axis(0, k.roll_rad).rotate_about_axis(1, k.pitch_rad)
+        r.rotate_about_axis(0, k.roll_rad)
+            .rotate_about_axis(1, k.pitch_rad)
     } else {
         r
     }
@@ -126,14 +127,27 @@ pub fn base_motion<T: Real, S: ShipMotion>(
     t: T,
 ) -> (M3<Jet<T, 1>>, V3<Jet<T, 1>>) {
     if !(ship_root && (fx.turn_rate || fx.roll_pitch)) {
-        let k = motion.kinematics(Jet { v: t, d: [T::one()] });
+        let k = motion.kinematics(Jet {
+            v: t,
+            d: [T::one()],
+        });
         let frame = frame_rate(&k, fx);
-        let r = if ship_root { world_from_ship(&k, fx) } else { M3::identity() };
+        let r = if ship_root {
+            world_from_ship(&k, fx)
+        } else {
+            M3::identity()
+        };
         return (r, frame);
     }
     // The ship's own rates are derivatives of its angles, and the engine needs their time
     // derivatives too: evaluate the program on a second-order jet in time.
-    let t2: Jet<Jet<T, 1>, 1> = Jet { v: Jet { v: t, d: [T::one()] }, d: [Jet::constant(T::one())] };
+    let t2: Jet<Jet<T, 1>, 1> = Jet {
+        v: Jet {
+            v: t,
+            d: [T::one()],
+        },
+        d: [Jet::constant(T::one())],
+    };
     let k = motion.kinematics(t2);
     let first = |x: Jet<Jet<T, 1>, 1>| x.v;
     let rate = |x: Jet<Jet<T, 1>, 1>| x.d[0];
@@ -147,14 +161,22 @@ pub fn base_motion<T: Real, S: ShipMotion>(
     if fx.roll_pitch {
         let rz = rot_axis(2, -first(k.heading_rad));
         let roll_axis = rz.col(0).scale(rate(k.roll_rad));
-        let pitch_axis = rz.rotate_about_axis(0, first(k.roll_rad)).col(1).scale(rate(k.pitch_rad));
+        let pitch_axis = rz
+            .rotate_about_axis(0, first(k.roll_rad))
+            .col(1)
+            .scale(rate(k.pitch_rad));
         w = w.add(&roll_axis).add(&pitch_axis);
     }
     (r, w)
 }
 
 /// Apparent gravity at the pivot (world axes), m/s².
-pub fn apparent_gravity<S: ShipMotion>(motion: &S, fx: &BaseEffects, pivot_m: [f64; 3], t: f64) -> [f64; 3] {
+pub fn apparent_gravity<S: ShipMotion>(
+    motion: &S,
+    fx: &BaseEffects,
+    pivot_m: [f64; 3],
+    t: f64,
+) -> [f64; 3] {
     let mut g = [0.0, 0.0, -STANDARD_GRAVITY_M_PER_S2];
     if !(fx.ship_acceleration || fx.base_coriolis || fx.roll_pitch) {
         return g;
@@ -185,7 +207,10 @@ pub fn apparent_gravity<S: ShipMotion>(motion: &S, fx: &BaseEffects, pivot_m: [f
     }
     if fx.roll_pitch {
         // The pivot swings about the roll centre: second time derivative of R_ship·pivot.
-        let t2: Jet<Jet<f64, 1>, 1> = Jet { v: Jet::variable(t, 0), d: [Jet::constant(1.0)] };
+        let t2: Jet<Jet<f64, 1>, 1> = Jet {
+            v: Jet::variable(t, 0),
+            d: [Jet::constant(1.0)],
+        };
         let k2 = motion.kinematics(t2);
         let r = world_from_ship(&k2, fx);
         let p = r.mul_v(&V3::from_f64(pivot_m));
@@ -200,7 +225,11 @@ pub fn apparent_gravity<S: ShipMotion>(motion: &S, fx: &BaseEffects, pivot_m: [f
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 #[cfg(test)]
@@ -209,8 +238,15 @@ mod tests {
 
     #[test]
     fn frame_rate_at_rest_is_the_earth_rate() {
-        let k = Moored { latitude_rad: 0.8, heading_rad: 0.3 }.kinematics(0.0f64);
-        let fx = BaseEffects { earth_rotation: true, ..Default::default() };
+        let k = Moored {
+            latitude_rad: 0.8,
+            heading_rad: 0.3,
+        }
+        .kinematics(0.0f64);
+        let fx = BaseEffects {
+            earth_rotation: true,
+            ..Default::default()
+        };
         let w = frame_rate(&k, &fx);
         assert!((w.0[0] - EARTH_RATE_RAD_PER_S * 0.8f64.cos()).abs() < 1e-20);
         assert!(w.0[1] == 0.0);

@@ -73,7 +73,12 @@ impl Chain {
         Chain {
             n: d.coordinates.len(),
             bodies,
-            forces: d.forces.iter().filter(|f| include_force(f)).cloned().collect(),
+            forces: d
+                .forces
+                .iter()
+                .filter(|f| include_force(f))
+                .cloned()
+                .collect(),
             ship_root: d.root == Root::Ship,
         }
     }
@@ -119,13 +124,26 @@ fn embed_time<T: Real, const N: usize>(x: Jet<T, 1>, slot: usize) -> Jet<T, N> {
 }
 
 /// Forms M, K, c for all coordinates. `N` must be `chain.n + 1`.
-pub fn evaluate<T: Real, const N: usize>(chain: &Chain, inp: &EvalInput<T>, out: &mut EvalOutput<T>) {
+pub fn evaluate<T: Real, const N: usize>(
+    chain: &Chain,
+    inp: &EvalInput<T>,
+    out: &mut EvalOutput<T>,
+) {
     let n = chain.n;
     debug_assert_eq!(N, n + 1);
     type S<T, const N: usize> = Jet<T, N>;
     let zero = S::<T, N>::zero();
-    let q: [S<T, N>; N] = std::array::from_fn(|i| if i < n { Jet::variable(inp.q[i], i) } else { zero });
-    let base_r = M3(inp.world_from_base.0.map(|row| row.map(|x| embed_time::<T, N>(x, n))));
+    let q: [S<T, N>; N] = std::array::from_fn(|i| {
+        if i < n {
+            Jet::variable(inp.q[i], i)
+        } else {
+            zero
+        }
+    });
+    let base_r = M3(inp
+        .world_from_base
+        .0
+        .map(|row| row.map(|x| embed_time::<T, N>(x, n))));
     let w0 = V3(inp.base_rate.0.map(|x| embed_time::<T, N>(x, n)));
 
     let mut p2 = [zero; N];
@@ -167,7 +185,12 @@ pub fn evaluate<T: Real, const N: usize>(chain: &Chain, inp: &EvalInput<T>, out:
             }
             None => (r_joint, jw_par, jm_par),
         };
-        kin.push(BodyKin { r: r_b, p: p_b, jw, jm });
+        kin.push(BodyKin {
+            r: r_b,
+            p: p_b,
+            jw,
+            jm,
+        });
         if !body.physical {
             continue;
         }
@@ -175,7 +198,13 @@ pub fn evaluate<T: Real, const N: usize>(chain: &Chain, inp: &EvalInput<T>, out:
         let c_w = p_b.add(&r_b.mul_v(&V3::from_f64(body.cg)));
         let ib = M3::<S<T, N>>::from_f64(body.inertia);
         let iw = |x: &V3<S<T, N>>| r_b.mul_v(&ib.mul_v(&r_b.tmul_v(x)));
-        let jv: [V3<S<T, N>>; N] = std::array::from_fn(|i| if i < n { jw[i].cross(&c_w).sub(&jm[i]) } else { vz });
+        let jv: [V3<S<T, N>>; N] = std::array::from_fn(|i| {
+            if i < n {
+                jw[i].cross(&c_w).sub(&jm[i])
+            } else {
+                vz
+            }
+        });
         let v0 = w0.cross(&c_w);
         let mut w_u = vz;
         let mut v_u = vz;
@@ -233,7 +262,9 @@ pub fn evaluate<T: Real, const N: usize>(chain: &Chain, inp: &EvalInput<T>, out:
     }
     for f in &chain.forces {
         match f {
-            Force::Damper { expr, coefficient, .. } => {
+            Force::Damper {
+                expr, coefficient, ..
+            } => {
                 let mut g = [T::zero(); N];
                 let qv: [T; N] = std::array::from_fn(|i| if i < n { inp.q[i] } else { T::zero() });
                 expr.add_gradient(&qv[..n], &mut g[..n]);
@@ -243,14 +274,30 @@ pub fn evaluate<T: Real, const N: usize>(chain: &Chain, inp: &EvalInput<T>, out:
                     }
                 }
             }
-            Force::Spring { expr, stiffness, rest, preload, .. } => {
+            Force::Spring {
+                expr,
+                stiffness,
+                rest,
+                preload,
+                ..
+            } => {
                 let e = expr.eval(&q[..n]);
                 let de = e - *rest;
                 v += de * de * (0.5 * stiffness) + e * *preload;
             }
-            Force::BodyForce { body, direction, force_n, point, .. } => {
+            Force::BodyForce {
+                body,
+                direction,
+                force_n,
+                point,
+                ..
+            } => {
                 let k = &kin[*body];
-                let pb = V3([point[0].eval(&q[..n]), point[1].eval(&q[..n]), point[2].eval(&q[..n])]);
+                let pb = V3([
+                    point[0].eval(&q[..n]),
+                    point[1].eval(&q[..n]),
+                    point[2].eval(&q[..n]),
+                ]);
                 let r_p = k.p.add(&k.r.mul_v(&pb));
                 let f_w = k.r.mul_v(&V3::from_f64(*direction)).scale_f(*force_n);
                 let tau = r_p.cross(&f_w);
@@ -258,7 +305,9 @@ pub fn evaluate<T: Real, const N: usize>(chain: &Chain, inp: &EvalInput<T>, out:
                     *qi += k.jw[i].dot(&tau).v;
                 }
             }
-            Force::Generalized { coordinate, torque, .. } => {
+            Force::Generalized {
+                coordinate, torque, ..
+            } => {
                 qf[*coordinate] += torque.eval(&q[..n]).v;
             }
         }
@@ -307,7 +356,11 @@ pub fn evaluate_any<T: Real>(chain: &Chain, inp: &EvalInput<T>, out: &mut EvalOu
 
 /// Poses of every body for display and recording: world_from_body rotation and the body
 /// origin's position relative to the pivot, in world axes (plain `f64`).
-pub fn body_poses(chain: &Chain, q: &[f64], world_from_base: &M3<f64>) -> Vec<([[f64; 3]; 3], [f64; 3])> {
+pub fn body_poses(
+    chain: &Chain,
+    q: &[f64],
+    world_from_base: &M3<f64>,
+) -> Vec<([[f64; 3]; 3], [f64; 3])> {
     let mut out: Vec<(M3<f64>, V3<f64>)> = Vec::with_capacity(chain.bodies.len());
     for body in &chain.bodies {
         let (r_par, p_par) = match body.parent {

@@ -67,12 +67,19 @@ fn line_has_key(l: &str, key: &str) -> bool {
 
 /// Converts a toml deserialisation error (which carries a byte span) into an [`InputError`].
 pub fn from_toml(file: &str, text: &str, e: &toml::de::Error) -> InputError {
-    let line = e.span().map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+    let line = e
+        .span()
+        .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
     let msg = e.message().to_string();
     let key = msg
         .split('`')
         .nth(1)
         .map(str::to_string)
         .unwrap_or_else(|| "(document)".to_string());
-    InputError { file: file.to_string(), line, key, message: msg }
+    InputError {
+        file: file.to_string(),
+        line,
+        key,
+        message: msg,
+    }
 }

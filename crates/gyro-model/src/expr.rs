@@ -21,10 +21,16 @@ pub struct QuadExpr {
 
 impl QuadExpr {
     pub fn constant(c: f64) -> Self {
-        QuadExpr { constant: c, ..Default::default() }
+        QuadExpr {
+            constant: c,
+            ..Default::default()
+        }
     }
     pub fn coordinate(i: usize) -> Self {
-        QuadExpr { linear: vec![(i, 1.0)], ..Default::default() }
+        QuadExpr {
+            linear: vec![(i, 1.0)],
+            ..Default::default()
+        }
     }
     pub fn is_constant(&self) -> bool {
         self.linear.is_empty() && self.quadratic.is_empty()
@@ -65,7 +71,10 @@ impl QuadExpr {
     }
     /// The constant second derivative matrix entries (for qᵀ∇²E q terms).
     pub fn hessian_quadratic_form(&self, v: &[f64]) -> f64 {
-        self.quadratic.iter().map(|&(i, j, b)| 2.0 * b * v[i] * v[j]).sum()
+        self.quadratic
+            .iter()
+            .map(|&(i, j, b)| 2.0 * b * v[i] * v[j])
+            .sum()
     }
 
     fn add(mut self, o: QuadExpr) -> QuadExpr {
@@ -118,7 +127,11 @@ impl QuadExpr {
             *quad.entry((i.min(j), i.max(j))).or_default() += b;
         }
         self.linear = lin.into_iter().filter(|x| x.1 != 0.0).collect();
-        self.quadratic = quad.into_iter().filter(|x| x.1 != 0.0).map(|((i, j), b)| (i, j, b)).collect();
+        self.quadratic = quad
+            .into_iter()
+            .filter(|x| x.1 != 0.0)
+            .map(|((i, j), b)| (i, j, b))
+            .collect();
         self
     }
 }
@@ -130,10 +143,18 @@ pub fn parse(
     parameters: &BTreeMap<String, f64>,
 ) -> Result<QuadExpr, String> {
     let tokens = tokenize(text)?;
-    let mut p = Parser { tokens, pos: 0, coordinates, parameters };
+    let mut p = Parser {
+        tokens,
+        pos: 0,
+        coordinates,
+        parameters,
+    };
     let e = p.sum()?;
     if p.pos != p.tokens.len() {
-        return Err(format!("unexpected `{}` in `{text}`", p.tokens[p.pos].show()));
+        return Err(format!(
+            "unexpected `{}` in `{text}`",
+            p.tokens[p.pos].show()
+        ));
     }
     Ok(e)
 }
@@ -176,7 +197,9 @@ fn tokenize(s: &str) -> Result<Vec<Tok>, String> {
                 i += 1;
             }
             let t: String = chars[start..i].iter().collect();
-            out.push(Tok::Num(t.parse().map_err(|_| format!("bad number `{t}`"))?));
+            out.push(Tok::Num(
+                t.parse().map_err(|_| format!("bad number `{t}`"))?,
+            ));
         } else if c.is_alphabetic() || c == '_' {
             let start = i;
             while i < chars.len() && (chars[i].is_alphanumeric() || chars[i] == '_') {
@@ -187,7 +210,9 @@ fn tokenize(s: &str) -> Result<Vec<Tok>, String> {
             out.push(Tok::Op(c));
             i += 1;
         } else {
-            return Err(format!("unexpected character `{c}` (allowed: numbers, names, + - * / ( ))"));
+            return Err(format!(
+                "unexpected character `{c}` (allowed: numbers, names, + - * / ( ))"
+            ));
         }
     }
     Ok(out)
@@ -300,7 +325,11 @@ impl Parser<'_> {
                 Err(format!(
                     "unknown name `{name}` (coordinates: {}; parameters: {})",
                     self.coordinates.join(", "),
-                    self.parameters.keys().cloned().collect::<Vec<_>>().join(", ")
+                    self.parameters
+                        .keys()
+                        .cloned()
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 ))
             }
             Tok::Op(c) => Err(format!("unexpected `{c}`")),
@@ -334,7 +363,11 @@ mod tests {
         let coords: Vec<String> = vec!["a".into()];
         let p = BTreeMap::new();
         assert!(parse("a*a*a", &coords, &p).is_err());
-        assert!(parse("a + b", &coords, &p).unwrap_err().contains("unknown name `b`"));
+        assert!(
+            parse("a + b", &coords, &p)
+                .unwrap_err()
+                .contains("unknown name `b`")
+        );
         assert!(parse("deg(90) - a", &coords, &p).is_ok());
     }
 }

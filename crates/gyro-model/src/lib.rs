@@ -25,5 +25,8 @@ pub mod theory;
 pub use design::{CoordinateRole, Design, Root, Shape, SpinMode};
 pub use earth::{BaseEffects, Moored, ShipKinematics, ShipMotion};
 pub use error::InputError;
-pub use model::{CompiledModel, EFFECT_NAMES, Effects, Fidelity, InitialCondition, ModelError, ModelOptions, Readout};
+pub use model::{
+    CompiledModel, EFFECT_NAMES, Effects, Fidelity, InitialCondition, ModelError, ModelOptions,
+    Readout,
+};
 pub use real::{Jet, Real};

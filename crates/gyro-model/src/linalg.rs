@@ -59,7 +59,11 @@ pub fn expm(a: &[f64], n: usize, h: f64) -> Vec<f64> {
     let norm = (0..n)
         .map(|i| (0..n).map(|j| (a[i * n + j] * h).abs()).sum::<f64>())
         .fold(0.0, f64::max);
-    let s = if norm > 0.5 { (norm / 0.5).log2().ceil() as i32 } else { 0 };
+    let s = if norm > 0.5 {
+        (norm / 0.5).log2().ceil() as i32
+    } else {
+        0
+    };
     let scale = h / 2f64.powi(s);
     let m: Vec<f64> = a.iter().map(|x| x * scale).collect();
     let mut result = identity(n);
@@ -168,7 +172,8 @@ fn hqr(a: &mut [f64], n: usize) -> Vec<(f64, f64)> {
         loop {
             let mut l = nn;
             while l >= 1 {
-                let s = a[idx(l as usize - 1, l as usize - 1)].abs() + a[idx(l as usize, l as usize)].abs();
+                let s = a[idx(l as usize - 1, l as usize - 1)].abs()
+                    + a[idx(l as usize, l as usize)].abs();
                 let s = if s == 0.0 { anorm } else { s };
                 if a[idx(l as usize, l as usize - 1)].abs() + s == s {
                     a[idx(l as usize, l as usize - 1)] = 0.0;
@@ -243,7 +248,8 @@ fn hqr(a: &mut [f64], n: usize) -> Vec<(f64, f64)> {
                     break;
                 }
                 let u = a[idx(mu, mu - 1)].abs() * (q.abs() + r.abs());
-                let v = p.abs() * (a[idx(mu - 1, mu - 1)].abs() + z.abs() + a[idx(mu + 1, mu + 1)].abs());
+                let v = p.abs()
+                    * (a[idx(mu - 1, mu - 1)].abs() + z.abs() + a[idx(mu + 1, mu + 1)].abs());
                 if u + v == v {
                     break;
                 }
@@ -261,7 +267,11 @@ fn hqr(a: &mut [f64], n: usize) -> Vec<(f64, f64)> {
                 if k != mu {
                     p = a[idx(k, k - 1)];
                     q = a[idx(k + 1, k - 1)];
-                    r = if k + 1 != nu { a[idx(k + 2, k - 1)] } else { 0.0 };
+                    r = if k + 1 != nu {
+                        a[idx(k + 2, k - 1)]
+                    } else {
+                        0.0
+                    };
                     x = p.abs() + q.abs() + r.abs();
                     if x != 0.0 {
                         p /= x;
@@ -322,7 +332,9 @@ mod tests {
     fn solve_matches_known_solution() {
         let mut a = vec![2.0, 1.0, 0.0, 1.0, 3.0, 1.0, 0.0, 1.0, 4.0];
         let x = [1.0, -2.0, 0.5];
-        let mut b: Vec<f64> = (0..3).map(|i| (0..3).map(|j| a[i * 3 + j] * x[j]).sum()).collect();
+        let mut b: Vec<f64> = (0..3)
+            .map(|i| (0..3).map(|j| a[i * 3 + j] * x[j]).sum())
+            .collect();
         assert!(solve_in_place(&mut a, &mut b, 3));
         for i in 0..3 {
             assert!((b[i] - x[i]).abs() < 1e-14);

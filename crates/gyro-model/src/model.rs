@@ -37,7 +37,9 @@ impl FromStr for Fidelity {
             "full" => Ok(Fidelity::Full),
             "gyroscopic" => Ok(Fidelity::Gyroscopic),
             "linear" => Ok(Fidelity::Linear),
-            _ => Err(format!("unknown fidelity `{s}` (allowed: full, gyroscopic, linear)")),
+            _ => Err(format!(
+                "unknown fidelity `{s}` (allowed: full, gyroscopic, linear)"
+            )),
         }
     }
 }
@@ -114,13 +116,22 @@ impl Effects {
             "base_coriolis" => b.base_coriolis = on,
             "damper" => self.damper = on,
             "friction" => self.friction = on,
-            _ => return Err(format!("unknown effect `{name}` (allowed: {})", EFFECT_NAMES.join(", "))),
+            _ => {
+                return Err(format!(
+                    "unknown effect `{name}` (allowed: {})",
+                    EFFECT_NAMES.join(", ")
+                ));
+            }
         }
         Ok(())
     }
     /// Names of the active effects, in the canonical order.
     pub fn names(&self) -> Vec<&'static str> {
-        EFFECT_NAMES.iter().copied().filter(|n| self.get(n) == Some(true)).collect()
+        EFFECT_NAMES
+            .iter()
+            .copied()
+            .filter(|n| self.get(n) == Some(true))
+            .collect()
     }
     fn include_force(&self, f: &Force) -> bool {
         match f {
@@ -140,6 +151,10 @@ pub struct InitialCondition {
     pub offsets_rad: Vec<(usize, f64)>,
     /// Initial rates (full index, rad/s).
     pub rates_rad_per_s: Vec<(usize, f64)>,
+    /// Start the precessional coordinates at the rates their first-order (precession) equations
+    /// give, instead of at rest: a `full` model then starts on the slow motion, without the
+    /// nutation that releasing a held gyro excites.
+    pub slow_start: bool,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -162,7 +177,10 @@ pub enum ModelError {
 impl fmt::Display for ModelError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            ModelError::TooManyCoordinates(n) => write!(f, "the design has {n} coordinates; the engine supports at most {MAX_COORDINATES}"),
+            ModelError::TooManyCoordinates(n) => write!(
+                f,
+                "the design has {n} coordinates; the engine supports at most {MAX_COORDINATES}"
+            ),
             ModelError::NoEquilibrium(s) => write!(f, "no apparent equilibrium found: {s}"),
             ModelError::Singular(s) => write!(f, "singular equations: {s}"),
             ModelError::Invalid(s) => write!(f, "{s}"),
@@ -228,7 +246,9 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
         let effects = opts.effects;
         let chain = Chain::from_design(&design, |f| effects.include_force(f));
-        let independent: Vec<usize> = (0..n).filter(|&i| design.coordinates[i].servo.is_none()).collect();
+        let independent: Vec<usize> = (0..n)
+            .filter(|&i| design.coordinates[i].servo.is_none())
+            .collect();
         let ni = independent.len();
         let mut servo_s = vec![0.0; n * ni];
         let mut servo_s0 = vec![0.0; n];
@@ -240,7 +260,10 @@ impl<M: ShipMotion> CompiledModel<M> {
                 servo_s0[i] = rel.constant;
                 for &(j, a) in &rel.linear {
                     let col = independent.iter().position(|&x| x == j).ok_or_else(|| {
-                        ModelError::Invalid(format!("servo relation of `{}` reads a driven coordinate", c.name))
+                        ModelError::Invalid(format!(
+                            "servo relation of `{}` reads a driven coordinate",
+                            c.name
+                        ))
                     })?;
                     servo_s[i * ni + col] += a;
                 }
@@ -248,14 +271,22 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
         let stationary = if motion.is_stationary() {
             let (r, w) = base_motion(&motion, design.root == Root::Ship, &effects.base, 0.0f64);
-            Some(StationaryBase { r, w, g: apparent_gravity(&motion, &effects.base, opts.pivot_m, 0.0) })
+            Some(StationaryBase {
+                r,
+                w,
+                g: apparent_gravity(&motion, &effects.base, opts.pivot_m, 0.0),
+            })
         } else {
             None
         };
         let spin_momentum = design
             .bodies
             .iter()
-            .map(|b| b.rotor.as_ref().map_or(0.0, |r| r.polar_inertia_kg_m2 * r.spin_rad_per_s))
+            .map(|b| {
+                b.rotor
+                    .as_ref()
+                    .map_or(0.0, |r| r.polar_inertia_kg_m2 * r.spin_rad_per_s)
+            })
             .collect();
         let mut model = CompiledModel {
             design,
@@ -285,20 +316,55 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
         model.x_equilibrium = x.clone();
         for &(i, off) in &opts.initial.offsets_rad {
-            let col = model.independent.iter().position(|&j| j == i).ok_or_else(|| {
-                ModelError::Invalid(format!("cannot offset the servo-driven coordinate `{}`", model.design.coordinates[i].name))
-            })?;
+            let col = model
+                .independent
+                .iter()
+                .position(|&j| j == i)
+                .ok_or_else(|| {
+                    ModelError::Invalid(format!(
+                        "cannot offset the servo-driven coordinate `{}`",
+                        model.design.coordinates[i].name
+                    ))
+                })?;
             x[col] += off;
         }
         for &(i, rate) in &opts.initial.rates_rad_per_s {
-            let col = model.independent.iter().position(|&j| j == i).ok_or_else(|| {
-                ModelError::Invalid(format!("cannot set the rate of the servo-driven coordinate `{}`", model.design.coordinates[i].name))
-            })?;
+            let col = model
+                .independent
+                .iter()
+                .position(|&j| j == i)
+                .ok_or_else(|| {
+                    ModelError::Invalid(format!(
+                        "cannot set the rate of the servo-driven coordinate `{}`",
+                        model.design.coordinates[i].name
+                    ))
+                })?;
             x[ni + col] = rate;
         }
         // A free rotor's absolute spin is fixed by the start: relative spin + carrier rate.
         model.update_free_rotors(&x);
         model.precessional = model.find_precessional(&x);
+        model.drop_full = vec![false; n];
+        for (col, &i) in model.independent.iter().enumerate() {
+            model.drop_full[i] = model.precessional[col];
+        }
+        if opts.initial.slow_start && model.precessional.iter().any(|p| *p) {
+            let mut xg: Vec<f64> = x[..ni].to_vec();
+            for col in 0..ni {
+                if !model.precessional[col] {
+                    xg.push(x[ni + col]);
+                }
+            }
+            let dim_g = xg.len();
+            let mut dx = vec![0.0; dim_g];
+            if model.rhs_generic(Fidelity::Gyroscopic, 0.0, &xg, &mut dx) {
+                for col in 0..ni {
+                    if model.precessional[col] {
+                        x[ni + col] = dx[col];
+                    }
+                }
+            }
+        }
         model.fidelity = opts.fidelity;
         match opts.fidelity {
             Fidelity::Full => model.x0 = x,
@@ -309,10 +375,6 @@ impl<M: ShipMotion> CompiledModel<M> {
                     model.fidelity = Fidelity::Full;
                     model.x0 = x;
                 } else {
-                    model.drop_full = vec![false; n];
-                    for (col, &i) in model.independent.iter().enumerate() {
-                        model.drop_full[i] = model.precessional[col];
-                    }
                     let mut x0: Vec<f64> = x[..ni].to_vec();
                     for col in 0..ni {
                         if !model.precessional[col] {
@@ -349,7 +411,11 @@ impl<M: ShipMotion> CompiledModel<M> {
 
     /// Names of the state components, for recordings.
     pub fn state_names(&self) -> Vec<String> {
-        let mut v: Vec<String> = self.independent.iter().map(|&i| self.design.coordinates[i].name.clone()).collect();
+        let mut v: Vec<String> = self
+            .independent
+            .iter()
+            .map(|&i| self.design.coordinates[i].name.clone())
+            .collect();
         for (col, &i) in self.independent.iter().enumerate() {
             if self.fidelity != Fidelity::Gyroscopic || !self.precessional[col] {
                 v.push(format!("{}_rate", self.design.coordinates[i].name));
@@ -410,12 +476,19 @@ impl<M: ShipMotion> CompiledModel<M> {
 
     /// Exact Jacobian of the equations at a given fidelity (`full` or `gyroscopic`).
     pub fn jacobian_at(&self, fidelity: Fidelity, t: f64, x: &[f64], jac: &mut [f64]) {
-        let dim = if fidelity == Fidelity::Gyroscopic { self.dim() } else { 2 * self.independent.len() };
+        let dim = if fidelity == Fidelity::Gyroscopic {
+            self.dim()
+        } else {
+            2 * self.independent.len()
+        };
         let mut xj = vec![Jet::<f64, 1>::constant(0.0); dim];
         let mut dxj = vec![Jet::<f64, 1>::constant(0.0); dim];
         for col in 0..dim {
             for i in 0..dim {
-                xj[i] = Jet { v: x[i], d: [if i == col { 1.0 } else { 0.0 }] };
+                xj[i] = Jet {
+                    v: x[i],
+                    d: [if i == col { 1.0 } else { 0.0 }],
+                };
             }
             self.rhs_generic(fidelity, Jet::constant(t), &xj, &mut dxj);
             for row in 0..dim {
@@ -429,7 +502,11 @@ impl<M: ShipMotion> CompiledModel<M> {
         let n = self.chain.n;
         let ni = self.independent.len();
         for i in 0..n {
-            let mut s = if with_offset { T::cst(self.servo_s0[i]) } else { T::zero() };
+            let mut s = if with_offset {
+                T::cst(self.servo_s0[i])
+            } else {
+                T::zero()
+            };
             for j in 0..ni {
                 let a = self.servo_s[i * ni + j];
                 if a != 0.0 {
@@ -443,12 +520,19 @@ impl<M: ShipMotion> CompiledModel<M> {
     fn base_at<T: Real>(&self, t: T) -> (M3<Jet<T, 1>>, V3<Jet<T, 1>>, [f64; 3]) {
         match &self.stationary {
             Some(s) => {
-                let lift = |x: Jet<f64, 1>| Jet { v: T::cst(x.v), d: [T::cst(x.d[0])] };
+                let lift = |x: Jet<f64, 1>| Jet {
+                    v: T::cst(x.v),
+                    d: [T::cst(x.d[0])],
+                };
                 (M3(s.r.0.map(|r| r.map(lift))), V3(s.w.0.map(lift)), s.g)
             }
             None => {
                 let (r, w) = base_motion(&self.motion, self.chain.ship_root, &self.effects.base, t);
-                (r, w, apparent_gravity(&self.motion, &self.effects.base, self.pivot_m, t.re()))
+                (
+                    r,
+                    w,
+                    apparent_gravity(&self.motion, &self.effects.base, self.pivot_m, t.re()),
+                )
             }
         }
     }
@@ -483,13 +567,21 @@ impl<M: ShipMotion> CompiledModel<M> {
             q: &q[..n],
             qd: &qd[..n],
             u: &u[..n],
-            drop_quadratic: if drop_precessional_inertia { &self.drop_full } else { &[] },
+            drop_quadratic: if drop_precessional_inertia {
+                &self.drop_full
+            } else {
+                &[]
+            },
             spin_momentum: &self.spin_momentum,
             world_from_base: &r,
             base_rate: &w,
             gravity: g,
         };
-        let mut out = EvalOutput { m: &mut m[..n * n], k: &mut k[..n * n], c: &mut c[..n] };
+        let mut out = EvalOutput {
+            m: &mut m[..n * n],
+            k: &mut k[..n * n],
+            c: &mut c[..n],
+        };
         evaluate_any(&self.chain, &inp, &mut out);
         // Rows of the non-driven coordinates only; driven columns folded into their drivers.
         let s = &self.servo_s;
@@ -511,7 +603,13 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
     }
 
-    pub(crate) fn rhs_generic<T: Real>(&self, fidelity: Fidelity, t: T, x: &[T], dx: &mut [T]) -> bool {
+    pub(crate) fn rhs_generic<T: Real>(
+        &self,
+        fidelity: Fidelity,
+        t: T,
+        x: &[T],
+        dx: &mut [T],
+    ) -> bool {
         const MX: usize = MAX_COORDINATES + 1;
         let ni = self.independent.len();
         let mut m = [T::zero(); MX * MX];
@@ -529,7 +627,16 @@ impl<M: ShipMotion> CompiledModel<M> {
                     }
                 }
                 let u = qd;
-                self.reduced(true, t, q, &qd[..ni], &u[..ni], &mut m[..ni * ni], &mut k[..ni * ni], &mut c[..ni]);
+                self.reduced(
+                    true,
+                    t,
+                    q,
+                    &qd[..ni],
+                    &u[..ni],
+                    &mut m[..ni * ni],
+                    &mut k[..ni * ni],
+                    &mut c[..ni],
+                );
                 let gi: Vec<usize> = (0..ni).filter(|&j| self.precessional[j]).collect();
                 let mis: Vec<usize> = (0..ni).filter(|&j| !self.precessional[j]).collect();
                 let ng = gi.len();
@@ -575,7 +682,16 @@ impl<M: ShipMotion> CompiledModel<M> {
             }
             _ => {
                 let qd = &x[ni..2 * ni];
-                self.reduced(false, t, q, qd, qd, &mut m[..ni * ni], &mut k[..ni * ni], &mut c[..ni]);
+                self.reduced(
+                    false,
+                    t,
+                    q,
+                    qd,
+                    qd,
+                    &mut m[..ni * ni],
+                    &mut k[..ni * ni],
+                    &mut c[..ni],
+                );
                 let mut r = [T::zero(); MX];
                 for i in 0..ni {
                     let mut s = c[i];
@@ -618,9 +734,21 @@ impl<M: ShipMotion> CompiledModel<M> {
             let mut cj = vec![Jet::<f64, 1>::constant(0.0); ni];
             for col in 0..ni {
                 for i in 0..ni {
-                    qj[i] = Jet { v: q[i], d: [if i == col { 1.0 } else { 0.0 }] };
+                    qj[i] = Jet {
+                        v: q[i],
+                        d: [if i == col { 1.0 } else { 0.0 }],
+                    };
                 }
-                self.reduced(false, Jet::constant(0.0), &qj, &zj, &zj, &mut mj, &mut kj, &mut cj);
+                self.reduced(
+                    false,
+                    Jet::constant(0.0),
+                    &qj,
+                    &zj,
+                    &zj,
+                    &mut mj,
+                    &mut kj,
+                    &mut cj,
+                );
                 for row in 0..ni {
                     jac[row * ni + col] = cj[row].d[0];
                 }
@@ -649,7 +777,9 @@ impl<M: ShipMotion> CompiledModel<M> {
         if norm <= 1e-9 * scale {
             Ok(q)
         } else {
-            Err(ModelError::NoEquilibrium(format!("Newton's method stalled with residual {norm:.3e} N·m")))
+            Err(ModelError::NoEquilibrium(format!(
+                "Newton's method stalled with residual {norm:.3e} N·m"
+            )))
         }
     }
 
@@ -662,17 +792,27 @@ impl<M: ShipMotion> CompiledModel<M> {
         let zero = vec![0.0; ni];
         self.reduced(false, 0.0, &x[..ni], &zero, &zero, &mut m, &mut k, &mut c);
         let skew = |i: usize, j: usize| 0.5 * (k[i * ni + j] - k[j * ni + i]);
-        let big = (0..ni).flat_map(|i| (0..ni).map(move |j| (i, j))).map(|(i, j)| skew(i, j).abs()).fold(0.0, f64::max);
+        let big = (0..ni)
+            .flat_map(|i| (0..ni).map(move |j| (i, j)))
+            .map(|(i, j)| skew(i, j).abs())
+            .fold(0.0, f64::max);
         if big == 0.0 {
             return vec![false; ni];
         }
-        (0..ni).map(|i| (0..ni).any(|j| skew(i, j).abs() > 1e-3 * big)).collect()
+        (0..ni)
+            .map(|i| (0..ni).any(|j| skew(i, j).abs() > 1e-3 * big))
+            .collect()
     }
 
     /// Sets the momentum of free rotors from a state: relative spin plus the carrier's rate.
     fn update_free_rotors(&mut self, x_full_layout: &[f64]) {
         let ni = self.independent.len();
-        if !self.design.bodies.iter().any(|b| b.rotor.as_ref().is_some_and(|r| r.mode == SpinMode::Free)) {
+        if !self
+            .design
+            .bodies
+            .iter()
+            .any(|b| b.rotor.as_ref().is_some_and(|r| r.mode == SpinMode::Free))
+        {
             return;
         }
         let n = self.chain.n;
@@ -690,7 +830,8 @@ impl<M: ShipMotion> CompiledModel<M> {
                     let poses = body_poses(&self.chain, &q, &rr);
                     let s = M3(poses[bi].0).mul_v(&V3(rot.axis));
                     let carrier = s.dot(&V3(rates[bi]));
-                    self.spin_momentum[bi] = rot.polar_inertia_kg_m2 * (rot.spin_rad_per_s + carrier);
+                    self.spin_momentum[bi] =
+                        rot.polar_inertia_kg_m2 * (rot.spin_rad_per_s + carrier);
                 }
             }
         }
@@ -771,4 +912,3 @@ impl<M: ShipMotion> CompiledModel<M> {
         linalg::eigenvalues(&a, dim)
     }
 }
-

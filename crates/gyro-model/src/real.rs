@@ -91,7 +91,10 @@ pub struct Jet<T: Real, const N: usize> {
 impl<T: Real, const N: usize> Jet<T, N> {
     #[inline(always)]
     pub fn constant(v: T) -> Self {
-        Jet { v, d: [T::zero(); N] }
+        Jet {
+            v,
+            d: [T::zero(); N],
+        }
     }
     /// The variable number `i` (derivative 1 along direction i).
     #[inline(always)]
@@ -190,14 +193,20 @@ impl<T: Real, const N: usize> Add<f64> for Jet<T, N> {
     type Output = Self;
     #[inline(always)]
     fn add(self, o: f64) -> Self {
-        Jet { v: self.v + o, d: self.d }
+        Jet {
+            v: self.v + o,
+            d: self.d,
+        }
     }
 }
 impl<T: Real, const N: usize> Sub<f64> for Jet<T, N> {
     type Output = Self;
     #[inline(always)]
     fn sub(self, o: f64) -> Self {
-        Jet { v: self.v - o, d: self.d }
+        Jet {
+            v: self.v - o,
+            d: self.d,
+        }
     }
 }
 impl<T: Real, const N: usize> Mul<f64> for Jet<T, N> {
@@ -247,7 +256,10 @@ impl<T: Real, const N: usize> Real for Jet<T, N> {
         for i in 0..N {
             d[i] = (x.v * y.d[i] - y.v * x.d[i]) / r2;
         }
-        Jet { v: y.v.atan2(x.v), d }
+        Jet {
+            v: y.v.atan2(x.v),
+            d,
+        }
     }
     #[inline(always)]
     fn asin(self) -> Self {

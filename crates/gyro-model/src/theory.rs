@@ -69,7 +69,11 @@ impl Villarceau {
     /// Period of the oscillation with turning point at γ₀ measured from the centre
     /// (0 < |γ₀| < π): the quadrature of eq. 47 with sin(γ/2) = sin(γ₀/2) sin φ.
     pub fn period(&self, amplitude_rad: f64) -> f64 {
-        let (w2, delta) = if self.g_over_a >= 0.0 { (self.g_over_a, self.delta) } else { (-self.g_over_a, -self.delta) };
+        let (w2, delta) = if self.g_over_a >= 0.0 {
+            (self.g_over_a, self.delta)
+        } else {
+            (-self.g_over_a, -self.delta)
+        };
         let k = (amplitude_rad.abs() / 2.0).sin();
         let c0 = amplitude_rad.cos();
         let f = |phi: f64| {
@@ -82,7 +86,11 @@ impl Villarceau {
 
     /// Small-amplitude period 2π/√((g/a)(1 − 2δ)).
     pub fn small_amplitude_period(&self) -> f64 {
-        let (w2, delta) = if self.g_over_a >= 0.0 { (self.g_over_a, self.delta) } else { (-self.g_over_a, -self.delta) };
+        let (w2, delta) = if self.g_over_a >= 0.0 {
+            (self.g_over_a, self.delta)
+        } else {
+            (-self.g_over_a, -self.delta)
+        };
         TAU / (w2 * (1.0 - 2.0 * delta)).sqrt()
     }
 }
@@ -138,7 +146,10 @@ pub fn integrate(f: &dyn Fn(f64) -> f64, a: f64, b: f64, rel_tol: f64) -> f64 {
     while let Some((x0, x1)) = stack.pop() {
         let (v, e) = gk(f, x0, x1);
         guard += 1;
-        if e <= rel_tol * whole * (x1 - x0) / (b - a) || guard > 100_000 || (x1 - x0) < 1e-15 * (b - a) {
+        if e <= rel_tol * whole * (x1 - x0) / (b - a)
+            || guard > 100_000
+            || (x1 - x0) < 1e-15 * (b - a)
+        {
             total += v;
         } else {
             let m = 0.5 * (x0 + x1);
@@ -171,12 +182,20 @@ impl Anschutz {
     }
     /// Undamped small-amplitude period (eq. 10): 2π√(IΩ/(aPε cos L)).
     pub fn undamped_period(&self) -> f64 {
-        TAU * (self.spin_momentum / (self.pendulous_moment * EARTH_RATE_RAD_PER_S * self.latitude_rad.cos())).sqrt()
+        TAU * (self.spin_momentum
+            / (self.pendulous_moment * EARTH_RATE_RAD_PER_S * self.latitude_rad.cos()))
+        .sqrt()
     }
     /// Roots of (ℭr² + τ)(𝔅r² + aP) + IΩr(IΩr + κ) = 0, slow pair first, each polished by Newton.
     pub fn characteristic_roots(&self) -> [(f64, f64); 4] {
-        let (c, b, h, k, ap, tau) =
-            (self.inertia_vertical, self.inertia_east_west, self.spin_momentum, self.kappa, self.pendulous_moment, self.tau());
+        let (c, b, h, k, ap, tau) = (
+            self.inertia_vertical,
+            self.inertia_east_west,
+            self.spin_momentum,
+            self.kappa,
+            self.pendulous_moment,
+            self.tau(),
+        );
         // c4 r⁴ + c2 r² + c1 r + c0
         let coef = [tau * ap, h * k, c * ap + b * tau + h * h, 0.0, c * b];
         let mut roots = polynomial_roots(&coef);
@@ -246,14 +265,24 @@ pub fn speed_error_rad(speed_m_per_s: f64, heading_rad: f64, latitude_rad: f64) 
 
 /// Schuler tuning: the spin momentum that makes an Anschütz compass's period 2π√(R/g).
 pub fn schuler_spin_momentum(pendulous_moment: f64, latitude_rad: f64) -> f64 {
-    pendulous_moment * EARTH_RATE_RAD_PER_S * latitude_rad.cos() * EARTH_RADIUS_M / STANDARD_GRAVITY_M_PER_S2
+    pendulous_moment * EARTH_RATE_RAD_PER_S * latitude_rad.cos() * EARTH_RADIUS_M
+        / STANDARD_GRAVITY_M_PER_S2
 }
 
 /// Mean reading error under rolling (Beghin §40, corrected): τζ₀ = −½ sinΔ cosΔ (J₀/g)² aP.
 /// Returned as the magnitude ½ |sinΔ cosΔ| (J₀/g)² aP/τ, rad.
-pub fn rolling_error_magnitude_rad(j0_m_per_s2: f64, roll_plane_azimuth_rad: f64, pendulous_moment: f64, tau: f64) -> f64 {
+pub fn rolling_error_magnitude_rad(
+    j0_m_per_s2: f64,
+    roll_plane_azimuth_rad: f64,
+    pendulous_moment: f64,
+    tau: f64,
+) -> f64 {
     let r = j0_m_per_s2 / STANDARD_GRAVITY_M_PER_S2;
-    0.5 * (roll_plane_azimuth_rad.sin() * roll_plane_azimuth_rad.cos()).abs() * r * r * pendulous_moment / tau
+    0.5 * (roll_plane_azimuth_rad.sin() * roll_plane_azimuth_rad.cos()).abs()
+        * r
+        * r
+        * pendulous_moment
+        / tau
 }
 
 #[cfg(test)]
@@ -263,7 +292,10 @@ mod tests {
     #[test]
     fn pendulum_period_matches_the_elliptic_integral() {
         // δ = 0: T = 4K(k)/√(g/a); K(sin 45°) = 1.854074677301372.
-        let v = Villarceau { g_over_a: 4.0, delta: 0.0 };
+        let v = Villarceau {
+            g_over_a: 4.0,
+            delta: 0.0,
+        };
         let t = v.period(PI / 2.0);
         assert!((t - 4.0 * 1.854_074_677_301_372 / 2.0).abs() < 1e-13);
     }
@@ -272,7 +304,10 @@ mod tests {
     fn quartic_roots_are_polished() {
         // (r² + 1e-6)(r² + 1e6) = r⁴ + (1e6 + 1e-6) r² + 1
         let roots = polynomial_roots(&[1.0, 0.0, 1e6 + 1e-6, 0.0, 1.0]);
-        let small = roots.iter().map(|r| r.1.abs()).fold(f64::INFINITY, f64::min);
+        let small = roots
+            .iter()
+            .map(|r| r.1.abs())
+            .fold(f64::INFINITY, f64::min);
         assert!((small - 1e-3).abs() < 1e-15);
     }
 }
@@ -281,7 +316,11 @@ mod tests {
 /// `ring` hinged about its z axis on the base, carrying a body `torus` with a rotor), from the
 /// design's own numbers and the model's spin momentum, at a latitude. Also returns the hinge
 /// angle of the hour plane (Villarceau's γ = hinge angle − offset).
-pub fn foucault_villarceau(design: &crate::Design, torus_spin_momentum: f64, latitude_rad: f64) -> Option<(Villarceau, f64)> {
+pub fn foucault_villarceau(
+    design: &crate::Design,
+    torus_spin_momentum: f64,
+    latitude_rad: f64,
+) -> Option<(Villarceau, f64)> {
     let ring = &design.bodies[design.body_index("ring")?];
     let torus = &design.bodies[design.body_index("torus")?];
     let rotor = torus.rotor.as_ref()?;
@@ -291,11 +330,19 @@ pub fn foucault_villarceau(design: &crate::Design, torus_spin_momentum: f64, lat
     let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let e = [latitude_rad.cos(), 0.0, latitude_rad.sin()];
     let cos_tp = dot(z, e);
-    let ex = [e[0] - cos_tp * z[0], e[1] - cos_tp * z[1], e[2] - cos_tp * z[2]];
+    let ex = [
+        e[0] - cos_tp * z[0],
+        e[1] - cos_tp * z[1],
+        e[2] - cos_tp * z[2],
+    ];
     let offset = dot(ex, y).atan2(dot(ex, x));
     // The torus axis in ring axes: angle η from the ring axis.
     let tj = torus.joint_rotation;
-    let a_ring = [tj[0][0] * rotor.axis[0] + tj[0][1] * rotor.axis[1] + tj[0][2] * rotor.axis[2], 0.0, tj[2][0] * rotor.axis[0] + tj[2][1] * rotor.axis[1] + tj[2][2] * rotor.axis[2]];
+    let a_ring = [
+        tj[0][0] * rotor.axis[0] + tj[0][1] * rotor.axis[1] + tj[0][2] * rotor.axis[2],
+        0.0,
+        tj[2][0] * rotor.axis[0] + tj[2][1] * rotor.axis[1] + tj[2][2] * rotor.axis[2],
+    ];
     let eta = a_ring[0].atan2(a_ring[2]);
     let v = Villarceau::new(&VillarceauInputs {
         a: torus.inertia_kg_m2[0][0],

@@ -3,11 +3,20 @@
 
 use gyro_model::constants::EARTH_RATE_RAD_PER_S;
 use gyro_model::theory::{Villarceau, VillarceauInputs};
-use gyro_model::{CompiledModel, Design, Effects, Fidelity, InitialCondition, ModelOptions, Moored};
+use gyro_model::{
+    CompiledModel, Design, Effects, Fidelity, InitialCondition, ModelOptions, Moored,
+};
 
 fn design(overrides: &[(&str, f64)]) -> Design {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../designs/foucault-gyroscope.toml")).expect("design file");
-    let ov: Vec<(String, toml::Value)> = overrides.iter().map(|(k, v)| (k.to_string(), toml::Value::Float(*v))).collect();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../designs/foucault-gyroscope.toml"
+    ))
+    .expect("design file");
+    let ov: Vec<(String, toml::Value)> = overrides
+        .iter()
+        .map(|(k, v)| (k.to_string(), toml::Value::Float(*v)))
+        .collect();
     Design::from_toml("foucault-gyroscope.toml", &text, &ov).expect("valid design")
 }
 
@@ -15,12 +24,26 @@ fn compile(d: Design, lat_deg: f64, gamma0: f64) -> CompiledModel<Moored> {
     let gi = d.coordinate_index("gamma").expect("gamma");
     CompiledModel::compile(
         d,
-        Moored { latitude_rad: lat_deg.to_radians(), heading_rad: 0.0 },
+        Moored {
+            latitude_rad: lat_deg.to_radians(),
+            heading_rad: 0.0,
+        },
         ModelOptions {
             fidelity: Fidelity::Full,
-            effects: Effects { base: gyro_model::BaseEffects { earth_rotation: true, ..Default::default() }, ..Default::default() },
+            effects: Effects {
+                base: gyro_model::BaseEffects {
+                    earth_rotation: true,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
             pivot_m: [0.0; 3],
-            initial: InitialCondition { from_equilibrium: false, offsets_rad: vec![(gi, gamma0)], rates_rad_per_s: vec![] },
+            initial: InitialCondition {
+                from_equilibrium: false,
+                offsets_rad: vec![(gi, gamma0)],
+                rates_rad_per_s: vec![],
+                slow_start: false,
+            },
         },
     )
     .expect("compiles")
@@ -34,15 +57,31 @@ fn villarceau_of(m: &CompiledModel<Moored>, lat_deg: f64) -> (Villarceau, f64) {
     let torus = &d.bodies[torus_i];
     let rotor = torus.rotor.as_ref().unwrap();
     // Ring axis in the local frame and its polar distance.
-    let z = [ring.joint_rotation[0][2], ring.joint_rotation[1][2], ring.joint_rotation[2][2]];
+    let z = [
+        ring.joint_rotation[0][2],
+        ring.joint_rotation[1][2],
+        ring.joint_rotation[2][2],
+    ];
     let l = lat_deg.to_radians();
     let cos_tp = z[0] * l.cos() + z[2] * l.sin();
     // Offset of the hour plane: the hinge angle at which the ring's x axis lies in the plane of
     // the ring axis and the Earth's axis, on the pole side.
     let e = [l.cos(), 0.0, l.sin()];
-    let ex = [e[0] - cos_tp * z[0], e[1] - cos_tp * z[1], e[2] - cos_tp * z[2]];
-    let x = [ring.joint_rotation[0][0], ring.joint_rotation[1][0], ring.joint_rotation[2][0]];
-    let y = [ring.joint_rotation[0][1], ring.joint_rotation[1][1], ring.joint_rotation[2][1]];
+    let ex = [
+        e[0] - cos_tp * z[0],
+        e[1] - cos_tp * z[1],
+        e[2] - cos_tp * z[2],
+    ];
+    let x = [
+        ring.joint_rotation[0][0],
+        ring.joint_rotation[1][0],
+        ring.joint_rotation[2][0],
+    ];
+    let y = [
+        ring.joint_rotation[0][1],
+        ring.joint_rotation[1][1],
+        ring.joint_rotation[2][1],
+    ];
     let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let offset = dot(ex, y).atan2(dot(ex, x));
     let v = Villarceau::new(&VillarceauInputs {
@@ -79,7 +118,10 @@ fn check(overrides: &[(&str, f64)], lat_deg: f64) {
             worst = worst.max((dx[1] - expect).abs() / scale);
         }
     }
-    assert!(worst < 1e-11, "engine vs eq. 44 bis: worst relative difference {worst:e} ({overrides:?}, L = {lat_deg}°)");
+    assert!(
+        worst < 1e-11,
+        "engine vs eq. 44 bis: worst relative difference {worst:e} ({overrides:?}, L = {lat_deg}°)"
+    );
 }
 
 #[test]
@@ -95,7 +137,14 @@ fn latitude_gyroscope_obeys_eq_44_bis() {
 #[test]
 fn oblique_rotor_exercises_the_delta_term() {
     // η = 20°, slow spin: δ is no longer negligible, and A′ ≠ B′ enters.
-    check(&[("parameters.eta_deg", 20.0), ("body.torus.rotor.spin_rpm", 0.5), ("parameters.ring_axis_elevation_deg", 30.0)], 50.0);
+    check(
+        &[
+            ("parameters.eta_deg", 20.0),
+            ("body.torus.rotor.spin_rpm", 0.5),
+            ("parameters.ring_axis_elevation_deg", 30.0),
+        ],
+        50.0,
+    );
 }
 
 #[test]

@@ -26,11 +26,21 @@ pub const SCENES: &[(&str, &str)] = shipped!("scenes";
 pub fn describe(text: &str) -> String {
     toml::from_str::<toml::Table>(text)
         .ok()
-        .and_then(|t| t.get("description").and_then(|d| d.as_str()).map(str::to_string))
+        .and_then(|t| {
+            t.get("description")
+                .and_then(|d| d.as_str())
+                .map(str::to_string)
+        })
         .unwrap_or_default()
 }
 
-fn read(reference: &str, dir: Option<&Path>, folder: &str, shipped: &[(&str, &str)], what: &str) -> Result<(String, String, Option<PathBuf>), InputError> {
+fn read(
+    reference: &str,
+    dir: Option<&Path>,
+    folder: &str,
+    shipped: &[(&str, &str)],
+    what: &str,
+) -> Result<(String, String, Option<PathBuf>), InputError> {
     if let Some(p) = crate::scene::resolve_path(reference, dir, folder) {
         let text = std::fs::read_to_string(&p).map_err(|e| InputError {
             file: p.display().to_string(),
@@ -50,7 +60,11 @@ fn read(reference: &str, dir: Option<&Path>, folder: &str, shipped: &[(&str, &st
         key: "(file)".into(),
         message: format!(
             "no such file, and no shipped {what} of that name (shipped: {})",
-            shipped.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+            shipped
+                .iter()
+                .map(|(n, _)| *n)
+                .collect::<Vec<_>>()
+                .join(", ")
         ),
     })
 }
@@ -62,6 +76,9 @@ pub fn read_scene(reference: &str) -> Result<(String, String, Option<PathBuf>), 
 
 /// Reads a design by path (relative to the scene's folder, or `../designs/NAME.toml` from it, or
 /// `designs/NAME.toml` here) or shipped name.
-pub fn read_design(reference: &str, scene_dir: Option<&Path>) -> Result<(String, String), InputError> {
+pub fn read_design(
+    reference: &str,
+    scene_dir: Option<&Path>,
+) -> Result<(String, String), InputError> {
     read(reference, scene_dir, "designs", DESIGNS, "design").map(|(l, t, _)| (l, t))
 }

@@ -14,9 +14,13 @@ use gyro_model::{Real, ShipKinematics, ShipMotion};
 pub enum SegmentKind {
     Steady,
     /// Constant acceleration along the heading, m/s².
-    SpeedChange { acceleration_m_per_s2: f64 },
+    SpeedChange {
+        acceleration_m_per_s2: f64,
+    },
     /// Constant rate of turn, rad/s (positive = to starboard, heading increasing).
-    Turn { rate_rad_per_s: f64 },
+    Turn {
+        rate_rad_per_s: f64,
+    },
 }
 
 /// A segment with its start state (filled in when the program is built).
@@ -87,13 +91,20 @@ impl ShipProgram {
     pub fn moves(&self) -> bool {
         self.force_moving
             || !self.sea.is_calm()
-            || self.segments.iter().any(|s| s.speed0_m_per_s != 0.0 || !matches!(s.kind, SegmentKind::Steady))
+            || self
+                .segments
+                .iter()
+                .any(|s| s.speed0_m_per_s != 0.0 || !matches!(s.kind, SegmentKind::Steady))
     }
     pub fn has_turns(&self) -> bool {
-        self.segments.iter().any(|s| matches!(s.kind, SegmentKind::Turn { .. }))
+        self.segments
+            .iter()
+            .any(|s| matches!(s.kind, SegmentKind::Turn { .. }))
     }
     pub fn has_speed(&self) -> bool {
-        self.segments.iter().any(|s| s.speed0_m_per_s != 0.0 || matches!(s.kind, SegmentKind::SpeedChange { .. }))
+        self.segments
+            .iter()
+            .any(|s| s.speed0_m_per_s != 0.0 || matches!(s.kind, SegmentKind::SpeedChange { .. }))
     }
 }
 
@@ -106,7 +117,9 @@ fn eval_segment<T: Real>(s: &Segment, tau: T) -> (T, T, T) {
             let lat = tau * (v0 * h0.cos() / EARTH_RADIUS_M) + s.latitude0_rad;
             (lat, T::cst(v0), T::cst(h0))
         }
-        SegmentKind::SpeedChange { acceleration_m_per_s2: a } => {
+        SegmentKind::SpeedChange {
+            acceleration_m_per_s2: a,
+        } => {
             let dist = tau * v0 + tau * tau * (0.5 * a);
             let lat = dist * (h0.cos() / EARTH_RADIUS_M) + s.latitude0_rad;
             (lat, tau * a + v0, T::cst(h0))
@@ -126,16 +139,24 @@ impl ShipMotion for ShipProgram {
         let (lat, v, h) = eval_segment(s, t - s.start_s);
         let sea = &self.sea;
         let roll = if sea.roll_amplitude_rad != 0.0 {
-            (t * (std::f64::consts::TAU / sea.roll_period_s) + sea.roll_phase_rad).sin() * sea.roll_amplitude_rad
+            (t * (std::f64::consts::TAU / sea.roll_period_s) + sea.roll_phase_rad).sin()
+                * sea.roll_amplitude_rad
         } else {
             T::zero()
         };
         let pitch = if sea.pitch_amplitude_rad != 0.0 {
-            (t * (std::f64::consts::TAU / sea.pitch_period_s) + sea.pitch_phase_rad).sin() * sea.pitch_amplitude_rad
+            (t * (std::f64::consts::TAU / sea.pitch_period_s) + sea.pitch_phase_rad).sin()
+                * sea.pitch_amplitude_rad
         } else {
             T::zero()
         };
-        ShipKinematics { latitude_rad: lat, heading_rad: h, speed_m_per_s: v, roll_rad: roll, pitch_rad: pitch }
+        ShipKinematics {
+            latitude_rad: lat,
+            heading_rad: h,
+            speed_m_per_s: v,
+            roll_rad: roll,
+            pitch_rad: pitch,
+        }
     }
     fn breakpoints(&self) -> Vec<f64> {
         self.segments.iter().skip(1).map(|s| s.start_s).collect()
@@ -151,9 +172,13 @@ impl ShipMotion for ShipProgram {
             }
             let d = s.duration_s.min(t_end - s.start_s).max(0.0);
             // Ends of the segment, plus the extreme of a turn's latitude swing.
-            m = m.max(eval_segment(s, 0.0).0.abs()).max(eval_segment(s, d).0.abs());
+            m = m
+                .max(eval_segment(s, 0.0).0.abs())
+                .max(eval_segment(s, d).0.abs());
             if let SegmentKind::Turn { rate_rad_per_s: r } = s.kind {
-                m = m.max(s.latitude0_rad.abs() + 2.0 * (s.speed0_m_per_s / (r * EARTH_RADIUS_M)).abs());
+                m = m.max(
+                    s.latitude0_rad.abs() + 2.0 * (s.speed0_m_per_s / (r * EARTH_RADIUS_M)).abs(),
+                );
             }
         }
         m
@@ -183,8 +208,20 @@ mod tests {
     fn latitude_rate_is_v_cos_heading_over_r_in_every_segment() {
         for s in [
             seg(SegmentKind::Steady, 15.0, 0.3),
-            seg(SegmentKind::SpeedChange { acceleration_m_per_s2: 0.2 }, 5.0, -0.7),
-            seg(SegmentKind::Turn { rate_rad_per_s: 0.01 }, 10.0, 1.0),
+            seg(
+                SegmentKind::SpeedChange {
+                    acceleration_m_per_s2: 0.2,
+                },
+                5.0,
+                -0.7,
+            ),
+            seg(
+                SegmentKind::Turn {
+                    rate_rad_per_s: 0.01,
+                },
+                10.0,
+                1.0,
+            ),
         ] {
             for tau in [0.0, 17.0, 333.0] {
                 let (lat, v, h) = eval_segment(&s, Jet::<f64, 1>::variable(tau, 0));

@@ -93,7 +93,11 @@ fn mat_t_vec(a: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
 }
 
 /// Runs `scene` and records it to `out` (which should end in `.mcap`).
-pub fn record(scene: &Scene, out: &Path, mut opts: RecordOptions) -> Result<RecordSummary, RunError> {
+pub fn record(
+    scene: &Scene,
+    out: &Path,
+    mut opts: RecordOptions,
+) -> Result<RecordSummary, RunError> {
     let started = Instant::now();
     let sim = Simulation::new(scene)?;
     let model = &sim.model;
@@ -102,7 +106,12 @@ pub fn record(scene: &Scene, out: &Path, mut opts: RecordOptions) -> Result<Reco
     let mut w = RecordingWriter::create(out, opts.writer.clone()).map_err(rec_err)?;
 
     // Channels.
-    let coords: Vec<String> = model.design.coordinates.iter().map(|c| c.name.clone()).collect();
+    let coords: Vec<String> = model
+        .design
+        .coordinates
+        .iter()
+        .map(|c| c.name.clone())
+        .collect();
     let mut fields = vec![
         FieldSpec::f64("time_s", "s"),
         FieldSpec::f64("reading_error_rad", "rad"),
@@ -117,7 +126,13 @@ pub fn record(scene: &Scene, out: &Path, mut opts: RecordOptions) -> Result<Reco
         fields.push(FieldSpec::f64(&format!("{c}_rate_rad_per_s"), "rad/s"));
     }
     let compass_ch = w
-        .add_record_channel("/compass/state", &RecordSchema { full_name: "gyrolab.CompassState".into(), fields })
+        .add_record_channel(
+            "/compass/state",
+            &RecordSchema {
+                full_name: "gyrolab.CompassState".into(),
+                fields,
+            },
+        )
         .map_err(rec_err)?;
     let ship_fields = [
         ("time_s", "s"),
@@ -135,7 +150,13 @@ pub fn record(scene: &Scene, out: &Path, mut opts: RecordOptions) -> Result<Reco
     .map(|(n, u)| FieldSpec::f64(n, u))
     .collect();
     let ship_ch = w
-        .add_record_channel("/ship/state", &RecordSchema { full_name: "gyrolab.ShipState".into(), fields: ship_fields })
+        .add_record_channel(
+            "/ship/state",
+            &RecordSchema {
+                full_name: "gyrolab.ShipState".into(),
+                fields: ship_fields,
+            },
+        )
         .map_err(rec_err)?;
     let event_ch = w
         .add_record_channel(
@@ -185,26 +206,53 @@ pub fn record(scene: &Scene, out: &Path, mut opts: RecordOptions) -> Result<Reco
     design_md.insert("path".to_string(), scene.design_path.clone());
     design_md.insert(
         "overrides".to_string(),
-        scene.design_overrides.iter().map(|(k, v)| format!("{k} = {v}")).collect::<Vec<_>>().join("; "),
+        scene
+            .design_overrides
+            .iter()
+            .map(|(k, v)| format!("{k} = {v}"))
+            .collect::<Vec<_>>()
+            .join("; "),
     );
     w.write_metadata("design", &design_md).map_err(rec_err)?;
     let mut bodies_md = BTreeMap::new();
     for b in &model.design.bodies {
         let parent = match b.parent {
             Some(p) => model.design.bodies[p].name.clone(),
-            None => if model.design.root == Root::Ship { "ship".into() } else { "earth".into() },
+            None => {
+                if model.design.root == Root::Ship {
+                    "ship".into()
+                } else {
+                    "earth".into()
+                }
+            }
         };
         bodies_md.insert(format!("{}.parent", b.name), parent);
         bodies_md.insert(format!("{}.shape", b.name), shape_toml(&b.shape));
         if let Some(r) = &b.rotor {
             bodies_md.insert(format!("{}.spin_axis", b.name), format!("{:?}", r.axis));
-            bodies_md.insert(format!("{}.spin_rad_per_s", b.name), format!("{}", r.spin_rad_per_s));
+            bodies_md.insert(
+                format!("{}.spin_rad_per_s", b.name),
+                format!("{}", r.spin_rad_per_s),
+            );
         }
     }
     w.write_metadata("bodies", &bodies_md).map_err(rec_err)?;
-    w.write_metadata("design_constants", &design_constants(&sim, scene)).map_err(rec_err)?;
-    w.attach("scene.toml", "application/toml", 0, scene.source_text.as_bytes()).map_err(rec_err)?;
-    w.attach("design.toml", "application/toml", 0, model.design.source_text.as_bytes()).map_err(rec_err)?;
+    w.write_metadata("design_constants", &design_constants(&sim, scene))
+        .map_err(rec_err)?;
+    w.attach(
+        "scene.toml",
+        "application/toml",
+        0,
+        scene.source_text.as_bytes(),
+    )
+    .map_err(rec_err)?;
+    w.attach(
+        "design.toml",
+        "application/toml",
+        0,
+        model.design.source_text.as_bytes(),
+    )
+    .map_err(rec_err)?;
 
     // Events, written when the run passes them (so log times stay ordered).
     let mut events: Vec<(f64, Vec<OwnedValue>)> = Vec::new();
@@ -253,7 +301,13 @@ pub fn record(scene: &Scene, out: &Path, mut opts: RecordOptions) -> Result<Reco
         .iter()
         .map(|b| match b.parent {
             Some(p) => names[p].clone(),
-            None => if model.design.root == Root::Ship { "ship".into() } else { "earth".into() },
+            None => {
+                if model.design.root == Root::Ship {
+                    "ship".into()
+                } else {
+                    "earth".into()
+                }
+            }
         })
         .collect();
 
@@ -261,7 +315,11 @@ pub fn record(scene: &Scene, out: &Path, mut opts: RecordOptions) -> Result<Reco
     let result = sim.run(scene.method, &scene.tolerances, |t, x| {
         let mut step = || -> Result<(), gyro_mcap::RecordingError> {
             while next_event < events.len() && events[next_event].0 <= t + 1e-9 {
-                let vals: Vec<Value> = events[next_event].1.iter().map(OwnedValue::as_value).collect();
+                let vals: Vec<Value> = events[next_event]
+                    .1
+                    .iter()
+                    .map(OwnedValue::as_value)
+                    .collect();
                 w.write_record(event_ch, ns(events[next_event].0), &vals)?;
                 next_event += 1;
             }
@@ -275,18 +333,43 @@ pub fn record(scene: &Scene, out: &Path, mut opts: RecordOptions) -> Result<Reco
             compass_vals[5 + coords.len()..].copy_from_slice(&r.qd);
             w.write_f64_record(compass_ch, ns(t), &compass_vals)?;
             let k = model.motion.kinematics(t);
-            let lon_rate = k.speed_m_per_s * k.heading_rad.sin() / (EARTH_RADIUS_M * k.latitude_rad.cos());
+            let lon_rate =
+                k.speed_m_per_s * k.heading_rad.sin() / (EARTH_RADIUS_M * k.latitude_rad.cos());
             if let Some((t0, r0)) = last {
                 longitude += 0.5 * (r0 + lon_rate) * (t - t0);
             }
             last = Some((t, lon_rate));
             let g = model.apparent_gravity(t);
-            ship_vals = [t, k.latitude_rad, longitude, k.heading_rad, k.speed_m_per_s, k.roll_rad, k.pitch_rad, g[0], g[1], g[2]];
+            ship_vals = [
+                t,
+                k.latitude_rad,
+                longitude,
+                k.heading_rad,
+                k.speed_m_per_s,
+                k.roll_rad,
+                k.pitch_rad,
+                g[0],
+                g[1],
+                g[2],
+            ];
             w.write_f64_record(ship_ch, ns(t), &ship_vals)?;
             if sample % pose_every == 0 {
                 let base = model.world_from_base(t);
-                let ship = if model.design.root == Root::Ship { base } else { gyro_model::earth::world_from_ship(&k, &model.effects.base).0 };
-                w.write_pose(tf_ch, ns(t), &Pose { parent_frame: "earth".into(), child_frame: "ship".into(), translation_m: [0.0; 3], rotation_xyzw: quat_from_matrix(&ship) })?;
+                let ship = if model.design.root == Root::Ship {
+                    base
+                } else {
+                    gyro_model::earth::world_from_ship(&k, &model.effects.base).0
+                };
+                w.write_pose(
+                    tf_ch,
+                    ns(t),
+                    &Pose {
+                        parent_frame: "earth".into(),
+                        child_frame: "ship".into(),
+                        translation_m: [0.0; 3],
+                        rotation_xyzw: quat_from_matrix(&ship),
+                    },
+                )?;
                 let poses = model.body_poses(t, &r.q);
                 for (bi, (rot, pos)) in poses.iter().enumerate() {
                     // parent_from_child = parent_worldᵀ · child_world.
@@ -297,7 +380,16 @@ pub fn record(scene: &Scene, out: &Path, mut opts: RecordOptions) -> Result<Reco
                     let rel = mat_t_mul(&prot, rot);
                     let d = [pos[0] - ppos[0], pos[1] - ppos[1], pos[2] - ppos[2]];
                     let tr = mat_t_vec(&prot, d);
-                    w.write_pose(tf_ch, ns(t), &Pose { parent_frame: parents[bi].clone(), child_frame: names[bi].clone(), translation_m: tr, rotation_xyzw: quat_from_matrix(&rel) })?;
+                    w.write_pose(
+                        tf_ch,
+                        ns(t),
+                        &Pose {
+                            parent_frame: parents[bi].clone(),
+                            child_frame: names[bi].clone(),
+                            translation_m: tr,
+                            rotation_xyzw: quat_from_matrix(&rel),
+                        },
+                    )?;
                 }
             }
             Ok(())
@@ -313,7 +405,10 @@ pub fn record(scene: &Scene, out: &Path, mut opts: RecordOptions) -> Result<Reco
                 last_progress = Instant::now();
             }
         }
-        if interrupt.as_ref().is_some_and(|i| i.load(Ordering::Relaxed)) {
+        if interrupt
+            .as_ref()
+            .is_some_and(|i| i.load(Ordering::Relaxed))
+        {
             return ControlFlow::Break(());
         }
         ControlFlow::Continue(())
@@ -333,7 +428,14 @@ pub fn record(scene: &Scene, out: &Path, mut opts: RecordOptions) -> Result<Reco
     w.write_record(
         stats_ch,
         ns(end_t),
-        &[Value::F64(end_t), Value::U64(s.steps), Value::U64(s.rejected_steps), Value::U64(s.rhs_evals), Value::U64(s.jacobian_evals), Value::F64(s.wall_time_s)],
+        &[
+            Value::F64(end_t),
+            Value::U64(s.steps),
+            Value::U64(s.rejected_steps),
+            Value::U64(s.rhs_evals),
+            Value::U64(s.jacobian_evals),
+            Value::F64(s.wall_time_s),
+        ],
     )
     .map_err(rec_err)?;
     let effects = model.effects.names();
@@ -351,13 +453,25 @@ pub fn record(scene: &Scene, out: &Path, mut opts: RecordOptions) -> Result<Reco
     put(&mut run_md, "atol", format!("{:e}", scene.tolerances.atol));
     put(&mut run_md, "effects", effects.join(","));
     put(&mut run_md, "coordinates", coords.join(","));
-    put(&mut run_md, "output_rate_hz", format!("{}", scene.output_rate_hz));
+    put(
+        &mut run_md,
+        "output_rate_hz",
+        format!("{}", scene.output_rate_hz),
+    );
     put(&mut run_md, "duration_s", format!("{}", scene.duration_s));
-    put(&mut run_md, "latitude_deg", format!("{}", scene.start_latitude_rad.to_degrees()));
-    put(&mut run_md, "status", match interrupted_at_s {
-        Some(t) => format!("interrupted at t = {t} s"),
-        None => "complete".into(),
-    });
+    put(
+        &mut run_md,
+        "latitude_deg",
+        format!("{}", scene.start_latitude_rad.to_degrees()),
+    );
+    put(
+        &mut run_md,
+        "status",
+        match interrupted_at_s {
+            Some(t) => format!("interrupted at t = {t} s"),
+            None => "complete".into(),
+        },
+    );
     put(&mut run_md, "rhs_cost_ns", format!("{rhs_cost_ns:.1}"));
     put(&mut run_md, "steps", s.steps.to_string());
     put(&mut run_md, "rejected_steps", s.rejected_steps.to_string());
@@ -397,11 +511,22 @@ impl OwnedValue {
 fn shape_toml(s: &gyro_model::Shape) -> String {
     use gyro_model::Shape::*;
     match s {
-        Ring { radius_m, width_m } => format!("{{ kind = \"ring\", radius_m = {radius_m}, width_m = {width_m} }}"),
-        Disc { radius_m, thickness_m } => format!("{{ kind = \"disc\", radius_m = {radius_m}, thickness_m = {thickness_m} }}"),
-        Box { size_m } => format!("{{ kind = \"box\", size_m = [{}, {}, {}] }}", size_m[0], size_m[1], size_m[2]),
+        Ring { radius_m, width_m } => {
+            format!("{{ kind = \"ring\", radius_m = {radius_m}, width_m = {width_m} }}")
+        }
+        Disc {
+            radius_m,
+            thickness_m,
+        } => format!("{{ kind = \"disc\", radius_m = {radius_m}, thickness_m = {thickness_m} }}"),
+        Box { size_m } => format!(
+            "{{ kind = \"box\", size_m = [{}, {}, {}] }}",
+            size_m[0], size_m[1], size_m[2]
+        ),
         Sphere { radius_m } => format!("{{ kind = \"sphere\", radius_m = {radius_m} }}"),
-        Hull { size_m } => format!("{{ kind = \"hull\", size_m = [{}, {}, {}] }}", size_m[0], size_m[1], size_m[2]),
+        Hull { size_m } => format!(
+            "{{ kind = \"hull\", size_m = [{}, {}, {}] }}",
+            size_m[0], size_m[1], size_m[2]
+        ),
         None => "{ kind = \"none\" }".into(),
     }
 }
@@ -420,7 +545,10 @@ fn design_constants(sim: &Simulation, scene: &Scene) -> BTreeMap<String, String>
             m.insert(key.to_string(), format!("{v}"));
         }
     }
-    if let (Some(h), Some(ap)) = (d.parameter("spin_momentum_n_m_s"), d.parameter("pendulous_moment_n_m")) {
+    if let (Some(h), Some(ap)) = (
+        d.parameter("spin_momentum_n_m_s"),
+        d.parameter("pendulous_moment_n_m"),
+    ) {
         let th = gyro_model::theory::Anschutz {
             spin_momentum: h,
             pendulous_moment: ap,
@@ -429,13 +557,23 @@ fn design_constants(sim: &Simulation, scene: &Scene) -> BTreeMap<String, String>
             inertia_east_west: 0.0,
             latitude_rad: scene.start_latitude_rad,
         };
-        m.insert("undamped_period_s".into(), format!("{}", th.undamped_period()));
+        m.insert(
+            "undamped_period_s".into(),
+            format!("{}", th.undamped_period()),
+        );
     }
     m.insert("schuler_period_s".into(), format!("{}", schuler_period_s()));
     // Slowest oscillatory mode of the linearisation.
     let modes = sim.model.modes();
-    if let Some(slow) = modes.iter().filter(|(_, im)| *im > 0.0).min_by(|a, b| a.1.total_cmp(&b.1)) {
-        m.insert("mode_period_s".into(), format!("{}", std::f64::consts::TAU / slow.1));
+    if let Some(slow) = modes
+        .iter()
+        .filter(|(_, im)| *im > 0.0)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+    {
+        m.insert(
+            "mode_period_s".into(),
+            format!("{}", std::f64::consts::TAU / slow.1),
+        );
         m.insert("mode_decay_rate_per_s".into(), format!("{}", -slow.0));
     }
     m

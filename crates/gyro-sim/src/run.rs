@@ -67,11 +67,23 @@ impl OdeSystem for ModelSystem<'_> {
 
 impl Simulation {
     pub fn new(scene: &Scene) -> Result<Simulation, RunError> {
-        let model = CompiledModel::compile(scene.design.clone(), scene.program.clone(), scene.model_options())
-            .map_err(RunError::Model)?;
-        let grid = OutputGrid { t0: 0.0, dt: 1.0 / scene.output_rate_hz, t_end: scene.duration_s };
+        let model = CompiledModel::compile(
+            scene.design.clone(),
+            scene.program.clone(),
+            scene.model_options(),
+        )
+        .map_err(RunError::Model)?;
+        let grid = OutputGrid {
+            t0: 0.0,
+            dt: 1.0 / scene.output_rate_hz,
+            t_end: scene.duration_s,
+        };
         let breakpoints = scene.program.breakpoints();
-        Ok(Simulation { model, grid, breakpoints })
+        Ok(Simulation {
+            model,
+            grid,
+            breakpoints,
+        })
     }
 
     /// Runs the scene, calling `observer(t, x)` at every output time.
@@ -87,17 +99,33 @@ impl Simulation {
             return Ok(self.run_linear_exact(&mut x, observer));
         }
         let mut sys = ModelSystem { model: &self.model };
-        let (stop, solver) = solvers::integrate(&mut sys, method, tol, &mut x, &self.grid, &self.breakpoints, |t, x| {
-            samples += 1;
-            observer(t, x)
-        })
+        let (stop, solver) = solvers::integrate(
+            &mut sys,
+            method,
+            tol,
+            &mut x,
+            &self.grid,
+            &self.breakpoints,
+            |t, x| {
+                samples += 1;
+                observer(t, x)
+            },
+        )
         .map_err(RunError::Solve)?;
-        Ok(RunStats { solver, stop, samples })
+        Ok(RunStats {
+            solver,
+            stop,
+            samples,
+        })
     }
 
     /// `linear` fidelity of an autonomous scene: x(t) = x_eq + exp(A t)(x0 − x_eq), propagated
     /// exactly from sample to sample with one matrix exponential.
-    fn run_linear_exact(&self, x: &mut [f64], mut observer: impl FnMut(f64, &[f64]) -> ControlFlow<()>) -> RunStats {
+    fn run_linear_exact(
+        &self,
+        x: &mut [f64],
+        mut observer: impl FnMut(f64, &[f64]) -> ControlFlow<()>,
+    ) -> RunStats {
         let start = Instant::now();
         let n = x.len();
         let a = self.model.linear_matrix();
@@ -127,8 +155,15 @@ impl Simulation {
             std::mem::swap(&mut dev, &mut tmp);
             k += 1;
         }
-        let solver = SolverStats { wall_time_s: start.elapsed().as_secs_f64(), ..Default::default() };
-        RunStats { solver, stop, samples }
+        let solver = SolverStats {
+            wall_time_s: start.elapsed().as_secs_f64(),
+            ..Default::default()
+        };
+        RunStats {
+            solver,
+            stop,
+            samples,
+        }
     }
 
     /// Measured cost of one right-hand side at the initial state, ns (median of 5 batches).

@@ -7,7 +7,11 @@ use gyro_sim::{Scene, SceneOverrides, Simulation};
 use std::ops::ControlFlow;
 
 pub fn scene_text(name: &str) -> String {
-    std::fs::read_to_string(format!("{}/../../scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"))).expect("shipped scene")
+    std::fs::read_to_string(format!(
+        "{}/../../scenes/{name}.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("shipped scene")
 }
 
 /// Loads a scene from TOML text (designs resolved from the repository's designs/ folder).
@@ -20,7 +24,11 @@ pub fn scene_from(text: &str, ov: &SceneOverrides) -> Scene {
 }
 
 /// Runs a scene and returns (t, state) samples.
-pub fn run(scene: &Scene, method: Method, tol: Tolerances) -> (Simulation, Vec<(f64, Vec<f64>)>, gyro_sim::RunStats) {
+pub fn run(
+    scene: &Scene,
+    method: Method,
+    tol: Tolerances,
+) -> (Simulation, Vec<(f64, Vec<f64>)>, gyro_sim::RunStats) {
     let sim = Simulation::new(scene).unwrap_or_else(|e| panic!("{e}"));
     let mut out = Vec::new();
     let stats = sim.run(method, &tol, |t, x| {
@@ -32,7 +40,12 @@ pub fn run(scene: &Scene, method: Method, tol: Tolerances) -> (Simulation, Vec<(
 }
 
 pub fn tol(rtol: f64, atol: f64) -> Tolerances {
-    Tolerances { rtol, atol, max_step_s: f64::INFINITY, initial_step_s: None }
+    Tolerances {
+        rtol,
+        atol,
+        max_step_s: f64::INFINITY,
+        initial_step_s: None,
+    }
 }
 
 /// Times where y crosses zero upward, from samples of y and its rate (cubic Hermite + bisection).
@@ -44,7 +57,10 @@ pub fn upward_crossings(t: &[f64], y: &[f64], yd: &[f64]) -> Vec<f64> {
             let p = |s: f64| {
                 let s2 = s * s;
                 let s3 = s2 * s;
-                (2.0 * s3 - 3.0 * s2 + 1.0) * y[k] + (s3 - 2.0 * s2 + s) * h * yd[k] + (-2.0 * s3 + 3.0 * s2) * y[k + 1] + (s3 - s2) * h * yd[k + 1]
+                (2.0 * s3 - 3.0 * s2 + 1.0) * y[k]
+                    + (s3 - 2.0 * s2 + s) * h * yd[k]
+                    + (-2.0 * s3 + 3.0 * s2) * y[k + 1]
+                    + (s3 - s2) * h * yd[k + 1]
             };
             let (mut a, mut b) = (0.0, 1.0);
             for _ in 0..80 {
