@@ -1,0 +1,419 @@
+//! The subcommands: each turns arguments into calls on the library crates and prints the result.
+
+use clap::Args;
+use gyro_model::Fidelity;
+use gyro_sim::solvers::Method;
+use gyro_sim::{RecordOptions, Scene, SceneOverrides};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// An error with its exit code.
+pub struct CliError {
+    pub code: u8,
+    pub message: String,
+}
+
+pub const BAD_INPUT: u8 = 2;
+pub const FAILED: u8 = 1;
+pub const INTERRUPTED: u8 = 130;
+
+fn bad(m: impl std::fmt::Display) -> CliError {
+    CliError {
+        code: BAD_INPUT,
+        message: m.to_string(),
+    }
+}
+fn failed(m: impl std::fmt::Display) -> CliError {
+    CliError {
+        code: FAILED,
+        message: m.to_string(),
+    }
+}
+
+#[derive(Args)]
+pub struct RunArgs {
+    /// Scene file, or the name of a shipped scene (see `gyrolab scenes`).
+    pub scene: String,
+    /// Design file or shipped design name, replacing the scene's.
+    #[arg(long)]
+    pub design: Option<String>,
+    /// Output file (default: recordings/<scene>.mcap).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// full, gyroscopic or linear.
+    #[arg(long)]
+    pub fidelity: Option<String>,
+    /// dopri5, dop853, rk4[:step_s] or rodas4.
+    #[arg(long)]
+    pub integrator: Option<String>,
+    #[arg(long)]
+    pub rtol: Option<f64>,
+    #[arg(long)]
+    pub atol: Option<f64>,
+    /// Output rate, Hz.
+    #[arg(long)]
+    pub rate_hz: Option<f64>,
+    /// Duration, s (replacing the scene's).
+    #[arg(long)]
+    pub duration_s: Option<f64>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+fn overrides(a: &RunArgs) -> Result<SceneOverrides, CliError> {
+    let fidelity = match &a.fidelity {
+        Some(f) => Some(
+            f.parse::<Fidelity>()
+                .map_err(|e| bad(format!("--fidelity: {e}")))?,
+        ),
+        None => None,
+    };
+    let method = match &a.integrator {
+        Some(m) => Some(m.parse::<Method>().map_err(|e| {
+            bad(format!(
+                "--integrator: {e} (allowed: dopri5, dop853, rk4[:step_s], rodas4)"
+            ))
+        })?),
+        None => None,
+    };
+    for (name, v) in [
+        ("--rtol", a.rtol),
+        ("--atol", a.atol),
+        ("--rate-hz", a.rate_hz),
+        ("--duration-s", a.duration_s),
+    ] {
+        if let Some(x) = v {
+            if !(x > 0.0 && x.is_finite()) {
+                return Err(bad(format!(
+                    "{name}: {x} is out of range (allowed: a positive number)"
+                )));
+            }
+        }
+    }
+    Ok(SceneOverrides {
+        design: a.design.clone(),
+        fidelity,
+        method,
+        rtol: a.rtol,
+        atol: a.atol,
+        output_rate_hz: a.rate_hz,
+        duration_s: a.duration_s,
+    })
+}
+
+pub fn run(a: RunArgs) -> Result<ExitCode, CliError> {
+    let scene = Scene::load(&a.scene, &overrides(&a)?).map_err(bad)?;
+    let out = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("recordings").join(format!("{}.mcap", scene.name)));
+    let summary = record_scene(&scene, &out, a.quiet || a.json)?;
+    print_summary(&summary, &scene, a.json);
+    Ok(if summary.interrupted_at_s.is_some() {
+        ExitCode::from(INTERRUPTED)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+fn record_scene(
+    scene: &Scene,
+    out: &Path,
+    quiet: bool,
+) -> Result<gyro_sim::RecordSummary, CliError> {
+    if let Some(dir) = out.parent() {
+        if !dir.as_os_str().is_empty() {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| failed(format!("cannot create {}: {e}", dir.display())))?;
+        }
+    }
+    let interrupt = Arc::new(AtomicBool::new(false));
+    {
+        let i = interrupt.clone();
+        // A second handler registration fails (e.g. in the demo's second run): keep the first.
+        let _ = ctrlc::set_handler(move || i.store(true, Ordering::Relaxed));
+    }
+    let bar = if quiet {
+        None
+    } else {
+        let b = indicatif::ProgressBar::new(scene.duration_s.ceil() as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{msg} [{bar:40}] {pos}/{len} s simulated ({eta} left)",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b.set_message(scene.name.clone());
+        // Only show it for runs that take more than a second.
+        b.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+        Some(b)
+    };
+    let started = std::time::Instant::now();
+    let mut progress = |t: f64| {
+        if let Some(b) = &bar {
+            if started.elapsed().as_secs_f64() > 1.0 && b.is_hidden() {
+                b.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+            }
+            b.set_position(t as u64);
+        }
+    };
+    let summary = gyro_sim::record(
+        scene,
+        out,
+        RecordOptions {
+            interrupt: Some(interrupt),
+            progress: Some(&mut progress),
+            writer: Default::default(),
+        },
+    );
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    summary.map_err(|e| match e {
+        gyro_sim::RunError::Model(m) => bad(format!("{}: {m}", scene.source_path)),
+        other => failed(format!(
+            "{}: {other} (a partial recording may be left as {}.partial: see `gyrolab recover`)",
+            scene.source_path,
+            out.display()
+        )),
+    })
+}
+
+fn print_summary(s: &gyro_sim::RecordSummary, scene: &Scene, json: bool) {
+    let st = &s.stats.solver;
+    if json {
+        let v = json!({
+            "scene": scene.name,
+            "design": scene.design.name,
+            "path": s.path,
+            "bytes": s.bytes,
+            "messages": s.messages,
+            "samples": s.stats.samples,
+            "effects": s.effects,
+            "fidelity": scene.fidelity.to_string(),
+            "integrator": scene.method.to_string(),
+            "rtol": scene.tolerances.rtol,
+            "steps": st.steps,
+            "rejected_steps": st.rejected_steps,
+            "rhs_evals": st.rhs_evals,
+            "jacobian_evals": st.jacobian_evals,
+            "integration_wall_time_s": st.wall_time_s,
+            "wall_time_s": s.wall_time_s,
+            "rhs_cost_ns": s.rhs_cost_ns,
+            "interrupted_at_s": s.interrupted_at_s,
+        });
+        println!("{v}");
+        return;
+    }
+    if let Some(t) = s.interrupted_at_s {
+        println!(
+            "interrupted at t = {t:.1} s of {:.1} s; the recording is closed and valid",
+            scene.duration_s
+        );
+    }
+    println!(
+        "{} — {} on {} ({}, {} rtol {:e})",
+        s.path.display(),
+        scene.design.name,
+        scene.name,
+        scene.fidelity,
+        scene.method,
+        scene.tolerances.rtol
+    );
+    println!("  effects:  {}", s.effects.join(", "));
+    println!(
+        "  solver:   {} steps ({} rejected), {} rhs, {} jacobians; rhs {:.0} ns",
+        st.steps, st.rejected_steps, st.rhs_evals, st.jacobian_evals, s.rhs_cost_ns
+    );
+    println!(
+        "  time:     {:.3} s integrating, {:.3} s in all",
+        st.wall_time_s, s.wall_time_s
+    );
+    println!(
+        "  file:     {:.2} MB, {} messages, {} samples",
+        s.bytes as f64 / 1e6,
+        s.messages,
+        s.stats.samples
+    );
+}
+
+/// The demo: a few shipped scenes recorded, with what each shows.
+pub fn demo(out: &Path, json: bool) -> Result<ExitCode, CliError> {
+    let scenes = [
+        "foucault-azimuth-45n",
+        "harbour-50n",
+        "run-north-30kn",
+        "speed-change-20kn",
+    ];
+    let mut rows = Vec::new();
+    for name in scenes {
+        let scene = Scene::load(name, &SceneOverrides::default()).map_err(bad)?;
+        let path = out.join(format!("{name}.mcap"));
+        let s = record_scene(&scene, &path, true)?;
+        let rec = gyro_mcap::Recording::open(&s.path).map_err(failed)?;
+        let table = rec.read_records("/compass/state").map_err(failed)?;
+        let err = table
+            .column("reading_error_rad")
+            .and_then(|c| c.as_f64())
+            .map(|v| v.to_vec())
+            .unwrap_or_default();
+        let t = table
+            .column("time_s")
+            .and_then(|c| c.as_f64())
+            .map(|v| v.to_vec())
+            .unwrap_or_default();
+        let last = err.last().copied().unwrap_or(f64::NAN);
+        let max = err.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let dc = rec
+            .metadata()
+            .get("design_constants")
+            .cloned()
+            .unwrap_or_default();
+        let period = dc.get("mode_period_s").cloned().unwrap_or_default();
+        let tend = t.last().copied().unwrap_or(0.0);
+        if !json {
+            println!(
+                "{name:<22} {:>7.2} MB {:>7} steps {:>7.3} s   reading error: max {:>7.3}°, {:>7.3}° at t = {:>6.0} s   slow mode {} s",
+                s.bytes as f64 / 1e6,
+                s.stats.solver.steps,
+                s.wall_time_s,
+                max.to_degrees(),
+                last.to_degrees(),
+                tend,
+                period.split('.').next().unwrap_or("-")
+            );
+        }
+        rows.push((name, s, last, max, period));
+    }
+    if json {
+        let v: Vec<_> = rows
+            .iter()
+            .map(|(n, s, last, max, period)| json!({"scene": n, "path": s.path, "bytes": s.bytes, "steps": s.stats.solver.steps, "wall_time_s": s.wall_time_s, "final_reading_error_deg": last.to_degrees(), "max_reading_error_deg": max.to_degrees(), "mode_period_s": period}))
+            .collect();
+        println!("{}", serde_json::Value::Array(v));
+    } else {
+        println!(
+            "recordings are in {}/ (open one with `gyrolab inspect`)",
+            out.display()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn recover(partial: &Path, output: Option<PathBuf>, json: bool) -> Result<ExitCode, CliError> {
+    let out = output.unwrap_or_else(|| {
+        let s = partial.to_string_lossy();
+        PathBuf::from(
+            s.strip_suffix(".partial")
+                .map(str::to_string)
+                .unwrap_or_else(|| format!("{s}.recovered.mcap")),
+        )
+    });
+    let r = gyro_mcap::recover(partial, &out).map_err(bad)?;
+    if json {
+        println!(
+            "{}",
+            json!({"out": r.out, "messages": r.messages, "chunks": r.chunks, "bytes_dropped": r.bytes_dropped, "stopped_because": r.stopped_because})
+        );
+    } else {
+        println!(
+            "{}: {} messages in {} chunks recovered ({} bytes after the last whole chunk dropped)",
+            r.out.display(),
+            r.messages,
+            r.chunks,
+            r.bytes_dropped
+        );
+        if let Some(why) = r.stopped_because {
+            println!("  stopped because: {why}");
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn list(items: &[(&str, &str)], what: &str, json: bool) -> Result<ExitCode, CliError> {
+    if json {
+        let v: Vec<_> = items
+            .iter()
+            .map(|(n, t)| json!({"name": n, "description": gyro_sim::library::describe(t)}))
+            .collect();
+        println!("{}", serde_json::Value::Array(v));
+    } else {
+        println!("shipped {what}:");
+        for (n, t) in items {
+            println!("  {n:<24} {}", gyro_sim::library::describe(t));
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn inspect(path: &Path, json: bool) -> Result<ExitCode, CliError> {
+    let rec = gyro_mcap::Recording::open(path).map_err(bad)?;
+    let chans = rec.channels();
+    if json {
+        let c: Vec<_> = chans
+            .iter()
+            .map(|c| json!({"topic": c.topic, "schema": c.schema_name, "encoding": c.message_encoding, "messages": c.message_count, "first_s": c.first_log_time_ns.map(|t| t as f64 * 1e-9), "last_s": c.last_log_time_ns.map(|t| t as f64 * 1e-9), "fields": c.field_names}))
+            .collect();
+        let md: serde_json::Map<String, serde_json::Value> = rec
+            .metadata()
+            .iter()
+            .map(|(k, v)| {
+                (
+                    k.clone(),
+                    json!(
+                        v.iter()
+                            .filter(|(kk, _)| kk.as_str() != "toml")
+                            .collect::<std::collections::BTreeMap<_, _>>()
+                    ),
+                )
+            })
+            .collect();
+        let att: Vec<_> = rec
+            .attachments()
+            .iter()
+            .map(|a| json!({"name": a.name, "media_type": a.media_type, "bytes": a.data.len()}))
+            .collect();
+        println!(
+            "{}",
+            json!({"path": path, "channels": c, "metadata": md, "attachments": att})
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!("{}", path.display());
+    println!("channels:");
+    for c in &chans {
+        let range = match (c.first_log_time_ns, c.last_log_time_ns) {
+            (Some(a), Some(b)) => format!("{:.3} … {:.3} s", a as f64 * 1e-9, b as f64 * 1e-9),
+            _ => "-".into(),
+        };
+        println!(
+            "  {:<18} {:<28} {:>9} msgs  {range}",
+            c.topic, c.schema_name, c.message_count
+        );
+    }
+    println!("metadata:");
+    for (name, m) in rec.metadata() {
+        let keys: Vec<String> = m
+            .iter()
+            .filter(|(k, _)| k.as_str() != "toml")
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect();
+        println!("  {name}: {}", keys.join(", "));
+    }
+    for a in rec.attachments() {
+        println!(
+            "attachment: {} ({}, {} bytes)",
+            a.name,
+            a.media_type,
+            a.data.len()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
