@@ -17,3 +17,4 @@ pub mod solvers;
 pub use record::{RecordOptions, RecordSummary, record};
 pub use run::{RunError, RunStats, Simulation};
 pub use scene::{Scene, SceneOverrides};
+pub mod accuracy;
