@@ -1,5 +1,5 @@
 //! Loading recordings: each channel becomes a polars [`DataFrame`] with `time_s` first, one column
-//! per field, and `run_id` last; many runs load in parallel (one recording per core).
+//! per field, and `run_id` last; many runs load in parallel, and the channels of one run too.
 //!
 //! Only the channels asked for are decoded (by default every record channel, and no poses: a day
 //! of poses is millions of rows the fits never read), so opening a recording for one channel
@@ -218,14 +218,17 @@ pub fn load_run(path: &Path, opts: &LoadOptions) -> Result<Run> {
             })
             .collect(),
     };
-    let mut frames = BTreeMap::new();
-    for ch in wanted {
-        let frame = match ch.kind {
-            ChannelKind::Pose => pose_frame(&recording, &ch.topic, &run_id)?,
-            _ => record_frame(&recording, &ch.topic, &run_id)?,
-        };
-        frames.insert(ch.topic.clone(), frame);
-    }
+    // Channels decode independently: one per core (a lone long run loads this way too).
+    let frames = wanted
+        .par_iter()
+        .map(|ch| {
+            let frame = match ch.kind {
+                ChannelKind::Pose => pose_frame(&recording, &ch.topic, &run_id)?,
+                _ => record_frame(&recording, &ch.topic, &run_id)?,
+            };
+            Ok((ch.topic.clone(), frame))
+        })
+        .collect::<Result<BTreeMap<String, DataFrame>>>()?;
     Ok(Run {
         path: path.to_path_buf(),
         run_id,
