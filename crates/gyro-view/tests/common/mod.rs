@@ -1,0 +1,233 @@
+//! A synthetic recording that follows docs/recordings.md: a small chain
+//! earth → ship → gimbal (ring) → float (sphere) → rotor (disc), compass and ship state,
+//! manoeuvre events, metadata with body shapes. Known values so the viewer's output can be checked.
+#![allow(dead_code)]
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use gyro_mcap::{FieldSpec, Pose, RecordSchema, RecordingWriter, Value, WriterOptions};
+
+pub const FRAMES: [(&str, &str); 4] = [
+    ("ship", "earth"),
+    ("gimbal", "ship"),
+    ("float", "gimbal"),
+    ("rotor", "float"),
+];
+
+/// The synthetic reading error: a damped sinusoid (radians) — also what the test's fit returns.
+pub const ERR_OFFSET: f64 = 0.002;
+pub const ERR_AMP: f64 = 0.02;
+pub const ERR_DECAY: f64 = 1.0 / 1500.0;
+pub const ERR_PERIOD: f64 = 600.0;
+
+pub fn reading_error(t: f64) -> f64 {
+    ERR_OFFSET + ERR_AMP * (-ERR_DECAY * t).exp() * (std::f64::consts::TAU * t / ERR_PERIOD).cos()
+}
+pub fn tilt(t: f64) -> f64 {
+    0.0005 * (std::f64::consts::TAU * t / ERR_PERIOD).sin()
+}
+pub fn roll(t: f64) -> f64 {
+    0.05 * (std::f64::consts::TAU * t / 9.0).sin()
+}
+pub fn speed(t: f64) -> f64 {
+    if t < 300.0 { 5.0 } else { 10.0 }
+}
+
+fn quat_x(a: f64) -> [f64; 4] {
+    [(0.5 * a).sin(), 0.0, 0.0, (0.5 * a).cos()]
+}
+fn quat_y(a: f64) -> [f64; 4] {
+    [0.0, (0.5 * a).sin(), 0.0, (0.5 * a).cos()]
+}
+
+/// Pose of each frame at time t: (translation, rotation) in its parent.
+pub fn pose(frame: &str, t: f64) -> ([f64; 3], [f64; 4]) {
+    match frame {
+        "ship" => ([0.0, 0.0, -0.5], quat_x(roll(t))),
+        // The gimbal's hinge undoes the roll; the float carries the tilt.
+        "gimbal" => ([0.0, 0.0, 0.5], quat_x(-roll(t))),
+        "float" => ([0.0, 0.0, 0.0], quat_y(tilt(t))),
+        _ => ([0.0, 0.0, 0.01], [0.0, 0.0, 0.0, 1.0]),
+    }
+}
+
+const DESIGN_TOML: &str = r#"
+name = "synthetic"
+kind = "gyrocompass"
+root = "ship"
+[[body]]
+name = "rotor"
+parent = "float"
+rotor = { axis = [1.0, 0.0, 0.0], polar_inertia_kg_m2 = 0.01, spin_rpm = 6000.0, spin = "held" }
+shape = { kind = "disc", radius_m = 0.06, thickness_m = 0.03 }
+"#;
+
+/// Writes `n` samples at `rate_hz` to `path`.
+pub fn write_recording(path: &Path, n: usize, rate_hz: f64) {
+    let mut w = RecordingWriter::create(path, WriterOptions::default()).expect("create");
+    let compass = RecordSchema {
+        full_name: "gyrolab.CompassState".into(),
+        fields: [
+            "time_s",
+            "reading_error_rad",
+            "compass_heading_rad",
+            "true_heading_rad",
+            "tilt_rad",
+            "theta_rad",
+            "theta_rate_rad_per_s",
+        ]
+        .iter()
+        .map(|f| FieldSpec::f64(f, ""))
+        .collect(),
+    };
+    let ship = RecordSchema {
+        full_name: "gyrolab.ShipState".into(),
+        fields: [
+            "time_s",
+            "latitude_rad",
+            "longitude_rad",
+            "heading_rad",
+            "speed_m_per_s",
+            "roll_rad",
+            "pitch_rad",
+            "gravity_north_m_per_s2",
+            "gravity_west_m_per_s2",
+            "gravity_up_m_per_s2",
+        ]
+        .iter()
+        .map(|f| FieldSpec::f64(f, ""))
+        .collect(),
+    };
+    let events = RecordSchema {
+        full_name: "gyrolab.ManoeuvreEvent".into(),
+        fields: vec![
+            FieldSpec::f64("time_s", "s"),
+            FieldSpec::str("phase"),
+            FieldSpec::str("manoeuvre"),
+            FieldSpec::u64("segment"),
+            FieldSpec::str("description"),
+            FieldSpec::f64("speed_before_m_per_s", "m/s"),
+            FieldSpec::f64("speed_after_m_per_s", "m/s"),
+            FieldSpec::f64("heading_before_rad", "rad"),
+            FieldSpec::f64("heading_after_rad", "rad"),
+            FieldSpec::f64("duration_s", "s"),
+        ],
+    };
+    let c = w
+        .add_record_channel("/compass/state", &compass)
+        .expect("channel");
+    let s = w.add_record_channel("/ship/state", &ship).expect("channel");
+    let e = w.add_record_channel("/events", &events).expect("channel");
+    let tf = w.add_pose_channel("/tf").expect("channel");
+    let heading = 0.3_f64;
+    for i in 0..n {
+        let t = i as f64 / rate_hz;
+        let ns = (t * 1e9).round() as u64;
+        let err = reading_error(t);
+        w.write_f64_record(
+            c,
+            ns,
+            &[t, err, heading + err, heading, tilt(t), tilt(t), 0.0],
+        )
+        .expect("compass");
+        let accel = if (300.0..320.0).contains(&t) {
+            0.25
+        } else {
+            0.0
+        };
+        w.write_f64_record(
+            s,
+            ns,
+            &[
+                t,
+                0.8,
+                0.1,
+                heading,
+                speed(t),
+                roll(t),
+                0.0,
+                -accel,
+                0.0,
+                -9.81,
+            ],
+        )
+        .expect("ship");
+        for (frame, parent) in FRAMES {
+            let (tr, q) = pose(frame, t);
+            w.write_pose(
+                tf,
+                ns,
+                &Pose {
+                    parent_frame: parent.into(),
+                    child_frame: frame.into(),
+                    translation_m: tr,
+                    rotation_xyzw: q,
+                },
+            )
+            .expect("pose");
+        }
+    }
+    for (t, phase) in [(300.0, "start"), (320.0, "end")] {
+        w.write_record(
+            e,
+            (t * 1e9) as u64,
+            &[
+                Value::F64(t),
+                Value::Str(phase),
+                Value::Str("speed_change"),
+                Value::U64(1),
+                Value::Str("5 → 10 m/s"),
+                Value::F64(5.0),
+                Value::F64(10.0),
+                Value::F64(heading),
+                Value::F64(heading),
+                Value::F64(20.0),
+            ],
+        )
+        .expect("event");
+    }
+    let meta = |pairs: &[(&str, &str)]| -> BTreeMap<String, String> {
+        pairs
+            .iter()
+            .map(|(k, v)| ((*k).into(), (*v).into()))
+            .collect()
+    };
+    w.write_metadata(
+        "run",
+        &meta(&[
+            ("scene_name", "synthetic-speed-change"),
+            ("design_name", "synthetic"),
+            ("design_kind", "gyrocompass"),
+            ("output_rate_hz", &rate_hz.to_string()),
+            ("duration_s", &(n as f64 / rate_hz).to_string()),
+            ("status", "complete"),
+            ("pose_every_n_samples", "1"),
+        ]),
+    )
+    .expect("meta");
+    w.write_metadata(
+        "bodies",
+        &meta(&[
+            (
+                "gimbal.shape",
+                r#"{ kind = "ring", radius_m = 0.12, width_m = 0.015 }"#,
+            ),
+            ("gimbal.parent", "ship"),
+            ("float.shape", r#"{ kind = "sphere", radius_m = 0.08 }"#),
+            ("float.parent", "gimbal"),
+            (
+                "rotor.shape",
+                r#"{ kind = "disc", radius_m = 0.06, thickness_m = 0.03 }"#,
+            ),
+            ("rotor.parent", "float"),
+        ]),
+    )
+    .expect("meta");
+    w.write_metadata(
+        "design",
+        &meta(&[("toml", DESIGN_TOML), ("path", "synthetic.toml")]),
+    )
+    .expect("meta");
+    w.finish().expect("finish");
+}

@@ -1,0 +1,437 @@
+//! The `.rrd` written for a synthetic scene loads back through Rerun's own decoder (the
+//! `rerun-sdk==0.36.3` Python package, installed by this test into a venv under the target
+//! directory) and holds the expected entity paths, a transform for every body at every kept
+//! sample, and the scalar series with the right lengths and values.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use gyro_view::{DampedSinusoid, Output, Sink, ViewOptions, view, view_with_fit};
+use serde_json::Value;
+
+fn workdir(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("gyro-view")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("work dir");
+    d
+}
+
+/// The venv's python with rerun-sdk 0.36.3, made on first use; None (and a visible SKIPPED)
+/// when there is no python3.
+fn rerun_python() -> Option<PathBuf> {
+    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rerun-sdk-0.36.3-venv");
+    let py = venv.join("bin").join("python");
+    let ready = |py: &Path| {
+        Command::new(py)
+            .args([
+                "-c",
+                "import rerun, sys; sys.exit(rerun.__version__ != '0.36.3')",
+            ])
+            .status()
+            .is_ok_and(|s| s.success())
+    };
+    if ready(&py) {
+        return Some(py);
+    }
+    if Command::new("python3").arg("--version").output().is_err() {
+        println!("SKIPPED: python3 not found, the .rrd was not loaded back through rerun-sdk");
+        return None;
+    }
+    let ok = Command::new("python3")
+        .args(["-m", "venv"])
+        .arg(&venv)
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(ok, "python3 -m venv {} failed", venv.display());
+    let ok = Command::new(&py)
+        .args(["-m", "pip", "install", "-q", "rerun-sdk==0.36.3"])
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(ok, "pip install rerun-sdk==0.36.3 failed");
+    assert!(ready(&py), "rerun-sdk 0.36.3 does not import");
+    Some(py)
+}
+
+/// Entity → its JSON summary from tests/rrd_dump.py.
+fn dump(py: &Path, rrd: &Path) -> Value {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests")
+        .join("rrd_dump.py");
+    let out = Command::new(py)
+        .arg(script)
+        .arg(rrd)
+        .output()
+        .expect("run python");
+    assert!(
+        out.status.success(),
+        "rrd_dump.py failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("json")
+}
+
+/// The temporal component of `entity` whose name ends with `component`: (times, values).
+fn temporal<'a>(d: &'a Value, entity: &str, component: &str) -> (Vec<i64>, &'a Vec<Value>) {
+    let comps = d["entities"][entity]["temporal"]
+        .as_object()
+        .unwrap_or_else(|| panic!("no temporal data at {entity}"));
+    let (_, c) = comps
+        .iter()
+        .find(|(k, _)| k.ends_with(component))
+        .unwrap_or_else(|| panic!("{entity}: no {component} in {:?}", comps.keys()));
+    let t = c["time_ns"]
+        .as_array()
+        .expect("times")
+        .iter()
+        .map(|v| v.as_i64().expect("i64"))
+        .collect();
+    (t, c["values"].as_array().expect("values"))
+}
+
+fn has_static(d: &Value, entity: &str, component: &str) -> bool {
+    d["entities"][entity]["static"].as_array().is_some_and(|a| {
+        a.iter()
+            .any(|c| c.as_str().is_some_and(|s| s.contains(component)))
+    })
+}
+
+/// Scalars of one-per-row list values.
+fn scalars(values: &[Value]) -> Vec<f64> {
+    values
+        .iter()
+        .map(|v| v[0].as_f64().expect("scalar"))
+        .collect()
+}
+
+fn f64s(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .expect("array")
+        .iter()
+        .map(|x| x.as_f64().expect("f64"))
+        .collect()
+}
+
+/// The value a series should hold at a time (s).
+type Expected = fn(f64) -> f64;
+
+const RATE_HZ: f64 = 2.0;
+const SAMPLES: usize = 1200;
+
+fn true_fit() -> DampedSinusoid {
+    DampedSinusoid {
+        offset: common::ERR_OFFSET,
+        drift_per_s: 0.0,
+        amplitude: common::ERR_AMP,
+        decay_rate_per_s: common::ERR_DECAY,
+        period_s: common::ERR_PERIOD,
+        phase_rad: 0.0,
+        t0_s: 0.0,
+        start_s: 100.0,
+        end_s: 500.0,
+    }
+}
+
+#[test]
+fn rrd_holds_bodies_poses_and_series_of_two_runs() {
+    let dir = workdir("two-runs");
+    let runs = [dir.join("alpha.mcap"), dir.join("beta.mcap")];
+    for r in &runs {
+        common::write_recording(r, SAMPLES, RATE_HZ);
+    }
+    let rrd = dir.join("both.rrd");
+    let opts = ViewOptions {
+        sink: Sink::Save(rrd.clone()),
+        max_pose_rate_hz: 1.0,
+        ..Default::default()
+    };
+    // The fit sees the reading error after the last manoeuvre event (320 s) and returns the
+    // curve the data were made from.
+    let fit = |t: &[f64], y: &[f64]| {
+        assert_eq!(t.first(), Some(&320.0));
+        assert_eq!(t.len(), y.len());
+        Some(true_fit())
+    };
+    let report = view_with_fit(&runs, &opts, &fit).expect("view");
+    let Output::Saved { path, bytes } = &report.output else {
+        panic!("not saved: {:?}", report.output)
+    };
+    assert_eq!(path, &rrd);
+    assert!(*bytes > 10_000, "{bytes} bytes");
+    assert_eq!(report.runs.len(), 2);
+    assert_eq!(report.runs[0].entity, "/runs/alpha");
+    assert_eq!(report.runs[1].entity, "/runs/beta");
+    assert_eq!(report.runs[0].samples, SAMPLES);
+    // 2 Hz decimated to 1 Hz: t = 0, 1, …, 599 s, and the last sample (599.5 s).
+    let kept: Vec<i64> = (0..600)
+        .map(|s| s * 1_000_000_000)
+        .chain([599_500_000_000])
+        .collect();
+    assert_eq!(report.runs[0].poses_per_frame, kept.len());
+
+    let Some(py) = rerun_python() else { return };
+    let d = dump(&py, &rrd);
+    assert_eq!(d["recordings"], 1);
+    assert_eq!(d["blueprints"], 1, "the layout travels in the file");
+    let full_t: Vec<i64> = (0..SAMPLES)
+        .map(|i| (i as f64 / RATE_HZ * 1e9).round() as i64)
+        .collect();
+
+    for run in ["alpha", "beta"] {
+        let root = format!("/runs/{run}");
+        // Every body, nested as its frames, posed at every kept sample with the recorded pose.
+        let mut path = format!("{root}/earth");
+        for (frame, _) in common::FRAMES {
+            path = format!("{path}/{frame}");
+            let (t, tr) = temporal(&d, &path, "translation");
+            let (tq, q) = temporal(&d, &path, "quaternion");
+            assert_eq!(t, kept, "{path}: translation times");
+            assert_eq!(tq, kept, "{path}: quaternion times");
+            for (i, &ns) in kept.iter().enumerate() {
+                let (want_t, want_q) = common::pose(frame, ns as f64 * 1e-9);
+                let got_t = f64s(&tr[i][0]);
+                let got_q = f64s(&q[i][0]);
+                for k in 0..3 {
+                    assert!((got_t[k] - want_t[k]).abs() < 1e-6, "{path} t[{i}]");
+                }
+                for k in 0..4 {
+                    assert!(
+                        (got_q[k] - want_q[k]).abs() < 1e-6,
+                        "{path} q[{i}] {got_q:?} {want_q:?}"
+                    );
+                }
+            }
+        }
+        // Shapes in the bodies' frames, the rotor's turning marker, the schematic hull.
+        let ship = format!("{root}/earth/ship");
+        assert!(has_static(&d, &format!("{ship}/gimbal/shape"), "Mesh3D"));
+        assert!(has_static(
+            &d,
+            &format!("{ship}/gimbal/float/shape"),
+            "Ellipsoids3D"
+        ));
+        assert!(has_static(
+            &d,
+            &format!("{ship}/gimbal/float/rotor/shape"),
+            "Cylinders3D"
+        ));
+        assert!(has_static(
+            &d,
+            &format!("{ship}/gimbal/float/rotor/spin_axis"),
+            "Arrows3D"
+        ));
+        assert!(has_static(
+            &d,
+            &format!("{ship}/hull_outline"),
+            "LineStrips3D"
+        ));
+        let (t, _) = temporal(
+            &d,
+            &format!("{ship}/gimbal/float/rotor/spin_marker"),
+            "quaternion",
+        );
+        assert_eq!(t, kept);
+        // True North, indicated North and the apparent vertical.
+        assert!(has_static(
+            &d,
+            &format!("{root}/overlay/true_north"),
+            "Arrows3D"
+        ));
+        for arrow in ["indicated_north", "apparent_vertical"] {
+            let (t, v) = temporal(&d, &format!("{root}/overlay/{arrow}"), "vectors");
+            assert_eq!(t, kept, "{arrow}");
+            assert_eq!(v.len(), kept.len());
+        }
+        // Under the 0.25 m/s² acceleration (300–320 s) the apparent vertical leans aft.
+        let (t, v) = temporal(&d, &format!("{root}/overlay/apparent_vertical"), "vectors");
+        let i = t
+            .iter()
+            .position(|&x| x == 310_000_000_000)
+            .expect("310 s kept");
+        let up = f64s(&v[i][0]);
+        let lean = up[0].atan2(up[2]);
+        assert!((lean - (0.25_f64).atan2(9.81)).abs() < 1e-5, "lean {lean}");
+
+        // Full-rate series, angles in degrees.
+        let series: [(&str, Expected); 5] = [
+            ("reading_error_deg", |t| {
+                common::reading_error(t).to_degrees()
+            }),
+            ("tilt_deg", |t| common::tilt(t).to_degrees()),
+            ("heading_deg/true", |_| 0.3_f64.to_degrees()),
+            ("speed_m_per_s", common::speed),
+            ("roll_deg", |t| common::roll(t).to_degrees()),
+        ];
+        for (leaf, f) in series {
+            let entity = format!("{root}/series/{leaf}");
+            let (t, v) = temporal(&d, &entity, "scalars");
+            assert_eq!(t, full_t, "{entity}: times");
+            let got = scalars(v);
+            for (k, &ns) in t.iter().enumerate() {
+                let want = f(ns as f64 * 1e-9);
+                assert!(
+                    (got[k] - want).abs() < 1e-9 * (1.0 + want.abs()),
+                    "{entity}[{k}] {} vs {want}",
+                    got[k]
+                );
+            }
+        }
+        let (t, _) = temporal(&d, &format!("{root}/series/heading_deg/compass"), "scalars");
+        assert_eq!(t.len(), SAMPLES);
+        // The fit and its envelope over the fit's window only.
+        let (t, v) = temporal(
+            &d,
+            &format!("{root}/series/reading_error_deg/fit"),
+            "scalars",
+        );
+        assert_eq!(t.len(), 801, "100..=500 s at 2 Hz");
+        assert_eq!(t[0], 100_000_000_000);
+        for (k, &ns) in t.iter().enumerate() {
+            let want = common::reading_error(ns as f64 * 1e-9).to_degrees();
+            assert!((scalars(v)[k] - want).abs() < 1e-9);
+        }
+        let (_, up) = temporal(
+            &d,
+            &format!("{root}/series/reading_error_deg/envelope_upper"),
+            "scalars",
+        );
+        let (_, lo) = temporal(
+            &d,
+            &format!("{root}/series/reading_error_deg/envelope_lower"),
+            "scalars",
+        );
+        let (up, lo) = (scalars(up), scalars(lo));
+        let a0 = (common::ERR_AMP * (-common::ERR_DECAY * 100.0).exp()).to_degrees();
+        assert!((up[0] - common::ERR_OFFSET.to_degrees() - a0).abs() < 1e-9);
+        assert!((lo[0] - common::ERR_OFFSET.to_degrees() + a0).abs() < 1e-9);
+        // Manoeuvre events: markers on the reading error and a text log.
+        let (t, v) = temporal(
+            &d,
+            &format!("{root}/series/reading_error_deg/events"),
+            "scalars",
+        );
+        assert_eq!(t, vec![300_000_000_000, 320_000_000_000]);
+        assert!((scalars(v)[0] - common::reading_error(300.0).to_degrees()).abs() < 1e-9);
+        let (t, v) = temporal(&d, &format!("{root}/events"), "text");
+        assert_eq!(t.len(), 2);
+        assert!(
+            v[0][0]
+                .as_str()
+                .is_some_and(|s| s.contains("speed_change start")),
+            "{:?}",
+            v[0]
+        );
+        assert!(has_static(&d, &format!("{root}/about"), "TextDocument"));
+    }
+}
+
+/// Quaternion product (x, y, z, w).
+fn qmul(a: &[f64], b: &[f64]) -> [f64; 4] {
+    [
+        a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1],
+        a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0],
+        a[3] * b[2] + a[0] * b[1] - a[1] * b[0] + a[2] * b[3],
+        a[3] * b[3] - a[0] * b[0] - a[1] * b[1] - a[2] * b[2],
+    ]
+}
+
+#[test]
+fn tilt_exaggeration_multiplies_the_float_tilt_in_the_file() {
+    let dir = workdir("exaggerated");
+    let run = dir.join("run.mcap");
+    common::write_recording(&run, 400, RATE_HZ);
+    let rrd = dir.join("run.rrd");
+    let opts = ViewOptions {
+        sink: Sink::Save(rrd.clone()),
+        tilt_exaggeration: 50.0,
+        ..Default::default()
+    };
+    view(&[run], &opts).expect("view");
+    let Some(py) = rerun_python() else { return };
+    let d = dump(&py, &rrd);
+    let mut path = "/runs/run/earth".to_owned();
+    let mut chain: Vec<(Vec<i64>, Vec<Value>)> = Vec::new();
+    for (frame, _) in &common::FRAMES[..3] {
+        path = format!("{path}/{frame}");
+        let (t, q) = temporal(&d, &path, "quaternion");
+        chain.push((t, q.clone()));
+    }
+    let (times, _) = &chain[0];
+    let mut checked = 0;
+    for (i, &ns) in times.iter().enumerate() {
+        let t = ns as f64 * 1e-9;
+        // earth_from_float = ship · gimbal · float; its z axis tilts about y by 50 × tilt(t)
+        // (the recorded roll and counter-roll cancel).
+        let q = chain.iter().fold([0.0, 0.0, 0.0, 1.0], |acc, (_, qs)| {
+            qmul(&acc, &f64s(&qs[i][0]))
+        });
+        let z = [
+            2.0 * (q[0] * q[2] + q[3] * q[1]),
+            2.0 * (q[1] * q[2] - q[3] * q[0]),
+            1.0 - 2.0 * (q[0] * q[0] + q[1] * q[1]),
+        ];
+        let shown = z[0].atan2(z[2]);
+        let want = 50.0 * common::tilt(t);
+        assert!(
+            (shown - want).abs() < 2e-4 * want.abs().max(1e-3),
+            "t {t}: {shown} vs {want}"
+        );
+        checked += 1;
+    }
+    assert!(checked > 100);
+    // The ship's roll (up to 0.05 rad) is exaggerated too, saturating below 80°.
+    let roll_shown: Vec<f64> = chain[0]
+        .1
+        .iter()
+        .map(|q| {
+            let q = f64s(&q[0]);
+            2.0 * q[0].atan2(q[3])
+        })
+        .collect();
+    let max = roll_shown.iter().fold(0.0_f64, |a, &b| a.max(b.abs()));
+    assert!(max > 1.0 && max < 80f64.to_radians(), "{max}");
+}
+
+/// `Sink::Spawn` with no `rerun` on PATH saves next to the first run and says how to open it.
+/// Runs itself in a child process whose PATH holds no viewer.
+#[test]
+fn spawn_without_viewer_saves_next_to_the_run() {
+    if std::env::var_os("GYRO_VIEW_SPAWN_CHILD").is_some() {
+        let dir = PathBuf::from(std::env::var_os("GYRO_VIEW_SPAWN_CHILD").expect("dir"));
+        let run = dir.join("lonely.mcap");
+        common::write_recording(&run, 50, RATE_HZ);
+        let opts = ViewOptions {
+            sink: Sink::Spawn,
+            ..Default::default()
+        };
+        let report = view(&[run], &opts).expect("view");
+        let want = dir.join("lonely.rrd");
+        assert!(matches!(&report.output, Output::Saved { path, .. } if path == &want));
+        assert!(
+            report
+                .notes
+                .iter()
+                .any(|n| n.contains("rerun ") && n.contains("lonely.rrd")),
+            "{:?}",
+            report.notes
+        );
+        assert!(want.is_file());
+        return;
+    }
+    let dir = workdir("spawn");
+    let status = Command::new(std::env::current_exe().expect("exe"))
+        .args([
+            "--exact",
+            "spawn_without_viewer_saves_next_to_the_run",
+            "--nocapture",
+        ])
+        .env("GYRO_VIEW_SPAWN_CHILD", &dir)
+        .env("PATH", dir.join("no-viewer-here"))
+        .status()
+        .expect("child");
+    assert!(status.success());
+    assert!(dir.join("lonely.rrd").is_file());
+}
