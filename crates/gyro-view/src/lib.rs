@@ -37,7 +37,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use rerun::blueprint::{
-    Blueprint, ContainerLike, Horizontal, Spatial3DView, TextLogView, TimeSeriesView, Vertical,
+    Blueprint, BlueprintPanel, ContainerLike, Horizontal, SelectionPanel, Spatial3DView,
+    TextLogView, TimePanel, TimeSeriesView, Vertical,
 };
 use rerun::{RecordingStream, RecordingStreamBuilder, TimeColumn, Timeline};
 
@@ -338,7 +339,16 @@ pub fn blueprint(run_roots: &[String], opts: &ViewOptions) -> Blueprint {
                     .into()
             }),
     );
+    use rerun::blueprint::components::{PanelState, PlayState};
     Blueprint::new(Horizontal::new([left.into(), right.into()]).with_column_shares([1.1, 1.0]))
+        .with_blueprint_panel(BlueprintPanel::new().with_state(PanelState::Collapsed))
+        .with_selection_panel(SelectionPanel::new().with_state(PanelState::Collapsed))
+        .with_time_panel(
+            TimePanel::new()
+                .with_state(PanelState::Collapsed)
+                .with_timeline(TIMELINE)
+                .with_play_state(PlayState::Following),
+        )
 }
 
 /// The first `rerun` executable on `PATH`.

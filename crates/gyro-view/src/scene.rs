@@ -186,7 +186,8 @@ fn log_shape(
                 format!("{entity}/shape"),
                 &Ellipsoids3D::from_radii([radius_m as f32])
                     .with_colors([color])
-                    .with_fill_mode(FillMode::MajorWireframe),
+                    .with_fill_mode(FillMode::MajorWireframe)
+                    .with_line_radii([(0.012 * radius_m) as f32]),
             )?;
         }
         Shape::Hull { size_m } => {
@@ -455,10 +456,10 @@ pub(crate) fn log_scene(
         rec.log_static(
             format!("{ship}/hull_outline"),
             &LineStrips3D::new(hull_outline(
-                8.0 * scale,
-                3.0 * scale,
-                1.2 * scale,
-                -1.5 * scale,
+                4.5 * scale,
+                1.8 * scale,
+                0.8 * scale,
+                -1.3 * scale,
             ))
             .with_colors([body_color(0, run_index)])
             .with_labels(["ship (schematic, not to scale)"]),
