@@ -1,0 +1,223 @@
+"""Peer benchmark: the same equations in Python with scipy.integrate.solve_ivp, side by side with
+gyrolab at matched achieved error.
+
+Cases (parameters read from gyrolab's own output, so both sides solve the same problem):
+- Villarceau's eq. 44 bis, gamma'' = (g/a)(-sin gamma + 2 delta sin gamma cos gamma), the Foucault
+  azimuth gyroscope released at rest 90 deg from the meridian, 100 exact periods. Error: the
+  phase-space distance sqrt(dgamma^2 + (dgamma'/w0)^2)/gamma0 after exactly 100 periods (the
+  motion is periodic with Villarceau's exact period, computed by gyrolab's quadrature).
+- Beghin's elementary linear Anschuetz, 4 states (zeta, theta, zeta', theta') with the design's
+  numbers, 1 hour; exact solution by scipy.linalg.expm (independent of gyrolab's). Error: max over
+  minutes of |dzeta|, |dtheta| over the 2 deg release.
+
+gyrolab's side runs as `cargo test --release -p gyro-sim --test accuracy peer_side -- --ignored`
+(env PEER_OUT=<json>). Ratios are taken at matched error: for a target error E, each side's cost
+is the least wall time of any of its runs whose achieved error is <= E.
+
+Usage: bash analysis/bench/run.sh [--skip-cargo FILE.json] [--out results.json]
+"""
+
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+import scipy
+from scipy.integrate import solve_ivp
+from scipy.linalg import expm
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+TOLS = [10.0 ** -k for k in range(4, 13)]
+TARGETS = [1e-4, 1e-6, 1e-8, 1e-10]
+
+
+def gyrolab_side(skip):
+    if skip:
+        with open(skip) as f:
+            return json.load(f)
+    out = os.path.join(tempfile.mkdtemp(), "gyrolab-peer.json")
+    env = dict(os.environ, PEER_OUT=out)
+    env.setdefault("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
+    subprocess.run(
+        ["cargo", "test", "--release", "-q", "-p", "gyro-sim", "--test", "accuracy",
+         "peer_side", "--", "--ignored", "--exact"],
+        cwd=ROOT, env=env, check=True, stdout=subprocess.DEVNULL)
+    with open(out) as f:
+        return json.load(f)
+
+
+def best_time(fn, min_total=0.2, max_reps=5):
+    """Best wall time of fn() over a few repetitions; returns (result of the first run, time)."""
+    t0 = time.perf_counter()
+    first = fn()
+    best = time.perf_counter() - t0
+    spent, reps = best, 1
+    while spent < min_total and reps < max_reps:
+        t0 = time.perf_counter()
+        fn()
+        dt = time.perf_counter() - t0
+        best, spent, reps = min(best, dt), spent + dt, reps + 1
+    return first, best
+
+
+def villarceau_points(v, atol_factor):
+    ga, delta, g0, period, periods = v["g_over_a"], v["delta"], v["gamma0"], v["period"], v["periods"]
+    w0 = math.sqrt(abs(ga))
+    t_end = periods * period
+
+    def f(t, x):
+        s, c = math.sin(x[0]), math.cos(x[0])
+        return [x[1], ga * (-s + 2.0 * delta * s * c)]
+
+    def jac(t, x):
+        s, c = math.sin(x[0]), math.cos(x[0])
+        return [[0.0, 1.0], [ga * (-c + 2.0 * delta * (c * c - s * s)), 0.0]]
+
+    pts = []
+    for method in ["DOP853", "RK45", "Radau", "LSODA"]:
+        for rtol in TOLS:
+            if method in ("Radau", "LSODA") and rtol < 1e-10:
+                continue  # minutes per run, and no better than the explicit pairs here
+
+            def run():
+                kw = {"jac": jac} if method in ("Radau", "LSODA") else {}
+                return solve_ivp(f, (0.0, t_end), [g0, 0.0], method=method, rtol=rtol,
+                                 atol=rtol * atol_factor, t_eval=[t_end], **kw)
+
+            sol, wall = best_time(run)
+            err = None
+            if sol.success:
+                x = sol.y[:, -1]
+                err = math.hypot(x[0] - g0, x[1] / w0) / g0
+            pts.append({"implementation": "scipy", "method": method, "rtol": rtol,
+                        "error": err, "wall_s": wall, "rhs_evals": int(sol.nfev)})
+    return pts
+
+
+def anschutz_points(p):
+    c, b, h, d = p["inertia_vertical"], p["inertia_east_west"], p["spin_momentum"], p["drag"]
+    a = np.array([
+        [0.0, 0.0, 1.0, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+        [-p["tau"] / c, 0.0, -d / c, h / c],
+        [-p["kappa"] / b, -p["pendulous_moment"] / b, -h / b, -d / b],
+    ])
+    x0 = np.array(p["x0"])
+    t_eval = np.arange(0.0, p["t_end"] + 0.5 * p["dt"], p["dt"])
+    e = expm(a * p["dt"])
+    exact = [x0]
+    for _ in t_eval[1:]:
+        exact.append(e @ exact[-1])
+    exact = np.array(exact)
+    scale = math.radians(2.0)
+
+    def f(t, x):
+        return a @ x
+
+    def jac(t, x):
+        return a
+
+    pts = []
+    for method in ["Radau", "BDF", "LSODA", "DOP853"]:
+        for rtol in TOLS:
+            if method == "DOP853" and rtol != TOLS[0]:
+                continue  # stability-bound by the 90 Hz nutation: ~2.6e6 calls, tens of seconds
+            if method in ("Radau", "BDF", "LSODA") and rtol < 1e-10:
+                continue
+
+            def run():
+                kw = {} if method == "DOP853" else {"jac": jac}
+                return solve_ivp(f, (0.0, p["t_end"]), x0, method=method, rtol=rtol,
+                                 atol=rtol * 1e-4, t_eval=t_eval, **kw)
+
+            sol, wall = best_time(run, min_total=0.0 if method == "DOP853" else 0.2)
+            err = None
+            if sol.success:
+                err = float(np.max(np.abs(sol.y[:2].T - exact[:, :2]))) / scale
+            pts.append({"implementation": "scipy", "method": method, "rtol": rtol,
+                        "error": err, "wall_s": wall, "rhs_evals": int(sol.nfev)})
+    return pts
+
+
+def cost_at(points, target):
+    ok = [p for p in points if p["error"] is not None and p["error"] <= target]
+    if not ok:
+        return None
+    return min(ok, key=lambda p: p["wall_s"])
+
+
+def table(rows):
+    w = [max(len(str(r[i])) for r in rows) for i in range(len(rows[0]))]
+    lines = []
+    for k, r in enumerate(rows):
+        lines.append("| " + " | ".join(str(x).ljust(w[i]) for i, x in enumerate(r)) + " |")
+        if k == 0:
+            lines.append("|" + "|".join("-" * (x + 2) for x in w) + "|")
+    return "\n".join(lines)
+
+
+def fmt(s):
+    return f"{s * 1e3:.3g} ms" if s < 1 else f"{s:.3g} s"
+
+
+def compare(name, ours, theirs, pairs):
+    rows = [["case", "target error", "gyrolab", "gyrolab time", "SciPy", "SciPy time", "SciPy / gyrolab"]]
+    for label_ours, sel_ours, label_theirs, sel_theirs in pairs:
+        for target in TARGETS:
+            a = cost_at([p for p in ours if sel_ours(p)], target)
+            b = cost_at([p for p in theirs if sel_theirs(p)], target)
+            if a is None or b is None:
+                continue
+            rows.append([name, f"{target:.0e}",
+                         f"{label_ours} ({a['method']} {a['rtol']:.0e})", fmt(a["wall_s"]),
+                         f"{label_theirs} ({b['method']} {b['rtol']:.0e})", fmt(b["wall_s"]),
+                         f"{b['wall_s'] / a['wall_s']:.0f}x"])
+    return rows
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--skip-cargo", help="read gyrolab's side from this JSON instead of running cargo")
+    ap.add_argument("--out", help="write both sides' points and the ratios as JSON")
+    args = ap.parse_args()
+    t0 = time.perf_counter()
+    g = gyrolab_side(args.skip_cargo)
+    v, p4 = g["villarceau"], g["anschutz4"]
+    sv = villarceau_points(v, g["atol_factor"])
+    sa = anschutz_points(p4)
+    ours = g["points"]
+    print(f"SciPy {scipy.__version__}, NumPy {np.__version__}, Python {sys.version.split()[0]}")
+    print(f"Villarceau: g/a = {v['g_over_a']:.6e} /s^2, delta = {v['delta']:.3e}, "
+          f"gamma0 = 90 deg, T = {v['period']:.9f} s, {v['periods']:.0f} periods; "
+          f"engine RHS {v['engine_rhs_ns']:.0f} ns")
+    rows = compare("Villarceau eq. 44 bis, 100 periods", ours, sv, [
+        ("hand-written", lambda p: p["implementation"] == "gyrolab eq44bis" and p["method"] == "dop853",
+         "DOP853", lambda p: p["method"] == "DOP853"),
+        ("hand-written, best", lambda p: p["implementation"] == "gyrolab eq44bis",
+         "best", lambda p: True),
+        ("engine", lambda p: p["implementation"] == "gyrolab engine",
+         "best", lambda p: True),
+    ])
+    rows += compare("linear Anschuetz, 4 states, 1 h", ours, sa, [
+        ("hand-written", lambda p: p["implementation"] == "gyrolab 4state",
+         "best", lambda p: True),
+    ])[1:]
+    print(table(rows))
+    print("\nall points (error, wall):")
+    for p in ours + sv + sa:
+        e = "failed" if p["error"] is None else f"{p['error']:.2e}"
+        print(f"  {p['implementation']:<16} {p['method']:<7} rtol {p['rtol']:.0e}: error {e:>9}, "
+              f"{fmt(p['wall_s']):>10}, {p['rhs_evals']} rhs")
+    print(f"\npeer benchmark wall time {time.perf_counter() - t0:.1f} s")
+    if args.out:
+        with open(args.out, "w") as f:
+            json.dump({"gyrolab": g, "scipy_villarceau": sv, "scipy_anschutz4": sa, "table": rows}, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
