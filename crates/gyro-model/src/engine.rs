@@ -123,14 +123,14 @@ fn embed_time<T: Real, const N: usize>(x: Jet<T, 1>, slot: usize) -> Jet<T, N> {
     Jet { v: x.v, d }
 }
 
-/// Forms M, K, c for all coordinates. `N` must be `chain.n + 1`.
+/// Forms M, K, c for all coordinates. `N` must be at least `chain.n + 1`; direction `n` is time.
 pub fn evaluate<T: Real, const N: usize>(
     chain: &Chain,
     inp: &EvalInput<T>,
     out: &mut EvalOutput<T>,
 ) {
     let n = chain.n;
-    debug_assert_eq!(N, n + 1);
+    debug_assert!(N > n);
     type S<T, const N: usize> = Jet<T, N>;
     let zero = S::<T, N>::zero();
     let q: [S<T, N>; N] = std::array::from_fn(|i| {
@@ -157,40 +157,37 @@ pub fn evaluate<T: Real, const N: usize>(
     let mut kin: Vec<BodyKin<S<T, N>, N>> = Vec::with_capacity(chain.bodies.len());
     let vz = V3::<S<T, N>>::zero();
     for (bi, body) in chain.bodies.iter().enumerate() {
-        let (r_par, p_par, jw_par, jm_par) = match body.parent {
-            Some(pi) => (kin[pi].r, kin[pi].p, kin[pi].jw, kin[pi].jm),
-            None => (base_r, vz, [vz; N], [vz; N]),
+        // Start from the parent's kinematics (one copy) and extend it in place.
+        let mut k = match body.parent {
+            Some(pi) => kin[pi],
+            None => BodyKin {
+                r: base_r,
+                p: vz,
+                jw: [vz; N],
+                jm: [vz; N],
+            },
         };
-        let p_b = p_par.add(&r_par.mul_v(&V3::from_f64(body.origin)));
-        let r_joint = match &body.joint_rotation {
-            Some(jr) => r_par.mul_m(&M3::from_f64(*jr)),
-            None => r_par,
-        };
-        let (r_b, jw, jm) = match &body.hinge {
-            Some(h) => {
-                let phi = h.angle.eval(&q[..n]);
-                let mut grad = [zero; N];
-                h.angle.add_gradient(&q[..n], &mut grad[..n]);
-                let a = r_joint.col(h.axis);
-                let axp = a.cross(&p_b);
-                let mut jw = jw_par;
-                let mut jm = jm_par;
-                for i in 0..n {
-                    if grad[i] != zero {
-                        jw[i] = jw[i].add(&a.scale(grad[i]));
-                        jm[i] = jm[i].add(&axp.scale(grad[i]));
-                    }
+        k.p = k.p.add(&k.r.mul_v(&V3::from_f64(body.origin)));
+        if let Some(jr) = &body.joint_rotation {
+            k.r = k.r.mul_m(&M3::from_f64(*jr));
+        }
+        if let Some(h) = &body.hinge {
+            let phi = h.angle.eval(&q[..n]);
+            let mut grad = [zero; N];
+            h.angle.add_gradient(&q[..n], &mut grad[..n]);
+            let a = k.r.col(h.axis);
+            let axp = a.cross(&k.p);
+            for i in 0..n {
+                if grad[i] != zero {
+                    k.jw[i] = k.jw[i].add(&a.scale(grad[i]));
+                    k.jm[i] = k.jm[i].add(&axp.scale(grad[i]));
                 }
-                (r_joint.rotate_about_axis(h.axis, phi), jw, jm)
             }
-            None => (r_joint, jw_par, jm_par),
-        };
-        kin.push(BodyKin {
-            r: r_b,
-            p: p_b,
-            jw,
-            jm,
-        });
+            k.r = k.r.rotate_about_axis(h.axis, phi);
+        }
+        kin.push(k);
+        let k = &kin[bi];
+        let (r_b, p_b, jw, jm) = (&k.r, &k.p, &k.jw, &k.jm);
         if !body.physical {
             continue;
         }
@@ -321,26 +318,21 @@ pub fn evaluate<T: Real, const N: usize>(
     }
 }
 
-/// Calls `evaluate` with N = n + 1 for the chain sizes gyrolab supports (1 to 15 coordinates).
+/// Calls `evaluate` with a jet width N ≥ n + 1 from a few buckets (unused directions stay zero).
+/// Buckets rather than one instantiation per size keep the compile time of the generic engine
+/// reasonable; the waste is at most a third of the derivative work.
 #[macro_export]
 #[doc(hidden)]
 macro_rules! dispatch_n {
     ($n:expr, $f:ident, $($arg:expr),*) => {
-        match $n {
-            1 => $f::<_, 2>($($arg),*),
-            2 => $f::<_, 3>($($arg),*),
-            3 => $f::<_, 4>($($arg),*),
-            4 => $f::<_, 5>($($arg),*),
-            5 => $f::<_, 6>($($arg),*),
-            6 => $f::<_, 7>($($arg),*),
-            7 => $f::<_, 8>($($arg),*),
-            8 => $f::<_, 9>($($arg),*),
-            9 => $f::<_, 10>($($arg),*),
-            10 => $f::<_, 11>($($arg),*),
-            11 => $f::<_, 12>($($arg),*),
-            12 => $f::<_, 13>($($arg),*),
-            13 => $f::<_, 14>($($arg),*),
-            14 => $f::<_, 15>($($arg),*),
+        match $n + 1 {
+            0..=2 => $f::<_, 2>($($arg),*),
+            3 => $f::<_, 3>($($arg),*),
+            4 => $f::<_, 4>($($arg),*),
+            5 => $f::<_, 5>($($arg),*),
+            6..=7 => $f::<_, 7>($($arg),*),
+            8..=10 => $f::<_, 10>($($arg),*),
+            11..=13 => $f::<_, 13>($($arg),*),
             _ => $f::<_, 16>($($arg),*),
         }
     };

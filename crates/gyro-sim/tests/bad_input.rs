@@ -1,0 +1,195 @@
+//! Malformed or out-of-range scenes and designs fail with an error naming the file, the line,
+//! the key and what is allowed — never a panic.
+
+mod support;
+use gyro_model::Design;
+use gyro_sim::{Scene, SceneOverrides};
+
+fn design_text() -> String {
+    std::fs::read_to_string(format!(
+        "{}/../../designs/anschutz-1906.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("design")
+}
+
+fn design_error(text: &str) -> gyro_model::InputError {
+    match std::panic::catch_unwind(|| Design::from_toml("my-design.toml", text, &[])) {
+        Ok(Ok(_)) => panic!("accepted a bad design"),
+        Ok(Err(e)) => e,
+        Err(_) => panic!("panicked on a bad design"),
+    }
+}
+
+fn scene_error(text: &str) -> gyro_model::InputError {
+    let dir = std::path::PathBuf::from(format!("{}/../../scenes", env!("CARGO_MANIFEST_DIR")));
+    match std::panic::catch_unwind(|| {
+        Scene::from_toml(
+            "my-scene.toml",
+            text,
+            Some(&dir),
+            &SceneOverrides::default(),
+        )
+    }) {
+        Ok(Ok(_)) => panic!("accepted a bad scene"),
+        Ok(Err(e)) => e,
+        Err(_) => panic!("panicked on a bad scene"),
+    }
+}
+
+fn line_of(text: &str, needle: &str) -> usize {
+    text.lines()
+        .position(|l| l.contains(needle))
+        .expect("needle")
+        + 1
+}
+
+#[test]
+fn negative_inertia_names_file_line_key_and_range() {
+    let text = design_text().replace(
+        "inertia_kg_m2 = [0.035, 0.040, 0.045]",
+        "inertia_kg_m2 = [-0.035, 0.040, 0.045]",
+    );
+    let e = design_error(&text);
+    assert_eq!(e.file, "my-design.toml");
+    assert_eq!(e.key, "body.float.inertia_kg_m2");
+    assert_eq!(e.line, Some(line_of(&text, "inertia_kg_m2 = [-0.035")));
+    assert!(e.message.contains("≥ 0"), "{e}");
+    assert!(
+        e.to_string()
+            .starts_with(&format!("my-design.toml:{}:", e.line.unwrap()))
+    );
+}
+
+#[test]
+fn zero_spin_is_refused() {
+    let foucault = std::fs::read_to_string(format!(
+        "{}/../../designs/foucault-gyroscope.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("design");
+    let text = foucault.replace("spin_rpm = 9000.0", "spin_rpm = 0.0");
+    let e = design_error(&text);
+    assert_eq!(e.key, "body.torus.rotor.spin_rpm");
+    assert!(e.message.contains("non-zero"), "{e}");
+    assert_eq!(e.line, Some(line_of(&text, "spin_rpm = 0.0")));
+    // Where the spin feeds other numbers, the first number it breaks is named.
+    let e = design_error(&design_text().replace("spin_rpm = 20000.0", "spin_rpm = 0.0"));
+    assert!(e.key.starts_with("parameters.") && e.line.is_some(), "{e}");
+}
+
+#[test]
+fn unknown_design_key_is_refused_with_its_line() {
+    let text = design_text().replace(
+        "mass_kg = \"= float_mass_kg\"",
+        "mass_kg = \"= float_mass_kg\"\nmas_kg = 3.0",
+    );
+    let e = design_error(&text);
+    assert_eq!(e.key, "mas_kg");
+    assert_eq!(e.line, Some(line_of(&text, "mas_kg = 3.0")));
+    assert!(e.message.contains("unknown field"), "{e}");
+}
+
+#[test]
+fn unknown_names_in_relations_and_expressions_are_refused() {
+    let e = design_error(&design_text().replace("angle_rad = \"theta\"", "angle_rad = \"thetta\""));
+    assert!(
+        e.message.contains("unknown name `thetta`") && e.key == "body.tilt_frame.hinge.angle_rad",
+        "{e}"
+    );
+    let e = design_error(
+        &design_text().replace("moving_mass_kg = 9.5", "moving_mass_kg = \"= 9.5 * nope\""),
+    );
+    assert!(
+        e.key == "parameters.moving_mass_kg" && e.message.contains("unknown name `nope`"),
+        "{e}"
+    );
+}
+
+fn scene(lat: &str, extra_sim: &str, program: &str) -> String {
+    format!(
+        "name = \"x\"\nduration_s = 100.0\n[start]\nlatitude_deg = {lat}\nspeed_kn = 10.0\n[compass]\ndesign = \"anschutz-1906\"\n{program}\n[simulation]\n{extra_sim}\n"
+    )
+}
+
+#[test]
+fn latitude_at_or_beyond_the_pole_is_refused() {
+    for lat in ["90.0", "-90.0", "91.5"] {
+        let text = scene(lat, "", "");
+        let e = scene_error(&text);
+        assert_eq!(e.key, "start.latitude_deg");
+        assert_eq!(e.line, Some(line_of(&text, "latitude_deg")));
+        assert!(e.message.contains("−90 < latitude < 90"), "{e}");
+    }
+    // A program that steams to the pole is refused too.
+    let text = scene(
+        "89.0",
+        "",
+        "[[program]]\nkind = \"steady\"\nduration_s = 100000.0",
+    );
+    let e = scene_error(&text.replace("duration_s = 100.0", "duration_s = 100000.0"));
+    assert!(e.message.contains("pole"), "{e}");
+}
+
+#[test]
+fn unknown_effect_and_fidelity_are_refused() {
+    let text = scene("50.0", "disable_effects = [\"tides\"]", "");
+    let e = scene_error(&text);
+    assert_eq!(e.key, "simulation.disable_effects");
+    assert!(
+        e.message.contains("unknown effect `tides`") && e.message.contains("earth_rotation"),
+        "{e}"
+    );
+    let e = scene_error(&scene("50.0", "fidelity = \"exact\"", ""));
+    assert!(
+        e.message.contains("allowed: full, gyroscopic, linear"),
+        "{e}"
+    );
+    let e = scene_error(&scene("50.0", "integrator = \"euler\"", ""));
+    assert!(e.message.contains("rodas4"), "{e}");
+}
+
+#[test]
+fn contradictory_options_are_refused() {
+    let text = scene(
+        "50.0",
+        "",
+        "[[program]]\nkind = \"turn\"\nby_deg = 90.0\nrate_deg_per_s = 1.0\nradius_m = 500.0",
+    );
+    let e = scene_error(&text);
+    assert!(e.message.contains("contradictory"), "{e}");
+    let text = scene(
+        "50.0",
+        "",
+        "[[program]]\nkind = \"speed_change\"\nto_speed_kn = 0.0\nacceleration_m_per_s2 = 0.1\nduration_s = 60.0",
+    );
+    let e = scene_error(&text);
+    assert!(e.message.contains("contradictory"), "{e}");
+}
+
+#[test]
+fn unknown_scene_key_and_missing_design_are_refused() {
+    let text = scene("50.0", "", "").replace("[start]\n", "[start]\nlatitude = 3\n");
+    let e = scene_error(&text);
+    assert_eq!(e.line, Some(line_of(&text, "latitude = 3")));
+    assert!(e.message.contains("unknown field `latitude`"), "{e}");
+    let e = scene_error(&scene("50.0", "", "").replace("anschutz-1906", "no-such-design"));
+    assert!(
+        e.message.contains("no shipped design") && e.message.contains("anschutz-1906"),
+        "{e}"
+    );
+}
+
+#[test]
+fn design_override_of_a_missing_key_names_it() {
+    let text = scene("50.0", "", "").replace(
+        "[compass]\n",
+        "[compass]\ndesign_overrides = { \"body.flaot.mass_kg\" = 3.0 }\n",
+    );
+    let e = scene_error(&text);
+    assert_eq!(e.key, "body.flaot.mass_kg");
+    assert!(
+        e.message.contains("no entry named `flaot`") && e.message.contains("float"),
+        "{e}"
+    );
+}
