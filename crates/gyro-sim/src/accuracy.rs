@@ -780,7 +780,7 @@ impl<S: OdeSystem> OdeSystem for Budget<S> {
     }
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
         self.calls = self.calls.wrapping_add(1);
-        if self.calls % 512 == 0 && Instant::now() > self.deadline {
+        if self.calls.is_multiple_of(512) && Instant::now() > self.deadline {
             self.over = true;
         }
         if self.over {
@@ -1282,6 +1282,19 @@ impl StudyReport {
     }
 }
 
+const KNOWN_CURVES: [&str; 10] = [
+    "dopri5",
+    "dop853",
+    "rodas4",
+    "rk4",
+    "expm",
+    "rodas4/full",
+    "rodas4/gyroscopic",
+    "expm/linear",
+    "dop853/gyroscopic",
+    "dopri5/gyroscopic",
+];
+
 const COLOURS: [&str; 10] = [
     "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#7f7f7f",
     "#bcbd22", "#17becf",
@@ -1372,7 +1385,11 @@ fn panel(s: &mut String, c: &CaseReport, x0: f64, y0: f64, pw: f64, ph: f64, tar
         }
     }
     for (ci, k) in curves.iter().enumerate() {
-        let colour = COLOURS[ci % COLOURS.len()];
+        // The same method (or method/fidelity) has the same colour in every panel.
+        let colour = KNOWN_CURVES
+            .iter()
+            .position(|c| c == k)
+            .map_or(COLOURS[ci % COLOURS.len()], |i| COLOURS[i % COLOURS.len()]);
         let mut pts: Vec<&&Point> = ok.iter().filter(|p| &p.curve(several) == k).collect();
         pts.sort_by(|a, b| a.wall_s.total_cmp(&b.wall_s));
         let line: Vec<String> = pts
@@ -1387,9 +1404,10 @@ fn panel(s: &mut String, c: &CaseReport, x0: f64, y0: f64, pw: f64, ph: f64, tar
         for p in &pts {
             let _ = writeln!(
                 s,
-                r#"<circle cx="{:.1}" cy="{:.1}" r="2.6" fill="{colour}"><title>{} rtol {:.0e}: error {:.2e}, {}</title></circle>"#,
+                r#"<circle cx="{:.1}" cy="{:.1}" r="{}" fill="{colour}"><title>{} rtol {:.0e}: error {:.2e}, {}</title></circle>"#,
                 px(p.wall_s),
                 py(err(p)),
+                if pts.len() == 1 { 4.5 } else { 2.6 },
                 k,
                 p.rtol,
                 err(p),
