@@ -417,3 +417,147 @@ pub fn inspect(path: &Path, json: bool) -> Result<ExitCode, CliError> {
     }
     Ok(ExitCode::SUCCESS)
 }
+
+pub fn analyze(runs: &[String], json: bool, table: Option<&Path>) -> Result<ExitCode, CliError> {
+    if json {
+        let all =
+            gyro_analysis::metrics::analyze_all(runs, &gyro_analysis::AnalysisOptions::default())
+                .map_err(bad)?;
+        println!("{}", serde_json::to_string_pretty(&all).map_err(failed)?);
+    } else {
+        let t = gyro_analysis::analyze_runs(runs).map_err(bad)?;
+        println!("{}", t.render_text());
+        if let Some(stem) = table {
+            for p in t.write_all(stem).map_err(failed)? {
+                println!("wrote {}", p.display());
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn compare(runs: &[String], out: &Path, markdown: bool) -> Result<ExitCode, CliError> {
+    std::fs::create_dir_all(out)
+        .map_err(|e| failed(format!("cannot create {}: {e}", out.display())))?;
+    let r = gyro_analysis::compare(runs, out).map_err(bad)?;
+    println!(
+        "{}",
+        if markdown {
+            r.render_markdown()
+        } else {
+            r.render_terminal()
+        }
+    );
+    println!("plots: {}/reading_error.svg and .png", out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The baseline scene set: small and fast, covering settling, speed error, a speed change and
+/// the exact Foucault reference.
+pub const REGRESS_SCENES: [&str; 4] = [
+    "foucault-azimuth-45n",
+    "harbour-50n",
+    "run-north-30kn",
+    "speed-change-20kn",
+];
+
+pub fn regress(
+    runs: &[String],
+    baseline: &Path,
+    update: bool,
+    out: &Path,
+    json: bool,
+) -> Result<ExitCode, CliError> {
+    let paths: Vec<String> = if runs.is_empty() {
+        let mut v = Vec::new();
+        for name in REGRESS_SCENES {
+            let scene = Scene::load(name, &SceneOverrides::default()).map_err(bad)?;
+            let path = out.join(format!("{name}.mcap"));
+            record_scene(&scene, &path, true)?;
+            v.push(path.display().to_string());
+        }
+        v
+    } else {
+        runs.to_vec()
+    };
+    let table = gyro_analysis::analyze_runs(&paths).map_err(bad)?;
+    if update {
+        gyro_analysis::update_baseline(&table, baseline, None).map_err(failed)?;
+        println!(
+            "baseline {} rewritten from {} runs: review the diff before committing",
+            baseline.display(),
+            paths.len()
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    let report = gyro_analysis::regress(&table, baseline, None).map_err(bad)?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report).map_err(failed)?);
+    } else {
+        println!("{}", report.render_terminal());
+    }
+    Ok(if report.passed() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(FAILED)
+    })
+}
+
+pub fn view(
+    runs: &[PathBuf],
+    save: Option<PathBuf>,
+    connect: Option<String>,
+    tilt_exaggeration: f64,
+    json: bool,
+) -> Result<ExitCode, CliError> {
+    if !(tilt_exaggeration >= 1.0 && tilt_exaggeration.is_finite()) {
+        return Err(bad(format!(
+            "--tilt-exaggeration: {tilt_exaggeration} is out of range (allowed: ≥ 1)"
+        )));
+    }
+    let sink = match (save, connect) {
+        (Some(p), _) => gyro_view::Sink::Save(p),
+        (None, Some(url)) => gyro_view::Sink::Connect(url),
+        (None, None) => gyro_view::Sink::Spawn,
+    };
+    let opts = gyro_view::ViewOptions {
+        sink,
+        tilt_exaggeration,
+        ..Default::default()
+    };
+    let report = gyro_view::view(runs, &opts).map_err(bad)?;
+    let (where_, bytes) = match &report.output {
+        gyro_view::Output::Saved { path, bytes } => (
+            format!(
+                "saved {} — open it with `rerun {}`",
+                path.display(),
+                path.display()
+            ),
+            Some(*bytes),
+        ),
+        gyro_view::Output::Spawned => ("sent to a new Rerun viewer".to_string(), None),
+        gyro_view::Output::Connected { url } => (format!("sent to {url}"), None),
+    };
+    if json {
+        let runs: Vec<_> = report.runs.iter().map(|r| json!({"path": r.path, "entity": r.entity, "samples": r.samples, "frames": r.frames})).collect();
+        println!(
+            "{}",
+            json!({"output": where_, "bytes": bytes, "runs": runs, "notes": report.notes, "elapsed_s": report.elapsed_s})
+        );
+    } else {
+        for r in &report.runs {
+            println!(
+                "{} → {}: {} samples, {} bodies",
+                r.path.display(),
+                r.entity,
+                r.samples,
+                r.frames.len()
+            );
+        }
+        for n in &report.notes {
+            println!("note: {n}");
+        }
+        println!("{where_} ({:.2} s)", report.elapsed_s);
+    }
+    Ok(ExitCode::SUCCESS)
+}

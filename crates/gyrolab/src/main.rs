@@ -57,6 +57,65 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Fitted metrics of recordings (files, folders or globs): period, decrement, steady,
+    /// ballistic and rolling errors. Writes the table as CSV, JSON and Parquet with --table.
+    Analyze {
+        #[arg(required = true)]
+        runs: Vec<String>,
+        #[arg(long)]
+        json: bool,
+        /// Write the metrics table to STEM.csv, STEM.json and STEM.parquet.
+        #[arg(long)]
+        table: Option<PathBuf>,
+    },
+    /// Side-by-side table of runs and an overlay plot of reading error (SVG and PNG).
+    Compare {
+        #[arg(required = true)]
+        runs: Vec<String>,
+        /// Folder for the plots.
+        #[arg(long, default_value = "analysis/compare")]
+        out: PathBuf,
+        /// Print Markdown instead of the terminal table.
+        #[arg(long)]
+        markdown: bool,
+    },
+    /// Show recordings in Rerun: gimbals posed in 3-D, series of reading error, tilt, heading,
+    /// speed and roll, manoeuvre events and the fitted envelope. Spawns the viewer when one is
+    /// installed, else saves an .rrd.
+    View {
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Save to this .rrd file instead of showing.
+        #[arg(long, conflicts_with_all = ["spawn", "connect"])]
+        save: Option<PathBuf>,
+        /// Start a viewer (the default).
+        #[arg(long)]
+        spawn: bool,
+        /// Stream to a running viewer, e.g. rerun+http://127.0.0.1:9876/proxy.
+        #[arg(long, conflicts_with = "spawn")]
+        connect: Option<String>,
+        /// Exaggerate tilts in the 3-D view by this factor (labelled in the view).
+        #[arg(long, default_value_t = 1.0)]
+        tilt_exaggeration: f64,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Check fitted metrics against the baseline in analysis/: runs the baseline scenes (or
+    /// reads the given recordings), prints what moved, exits 1 on a regression.
+    Regress {
+        /// Recordings to check instead of running the baseline scenes.
+        runs: Vec<String>,
+        #[arg(long, default_value = "analysis/baseline.toml")]
+        baseline: PathBuf,
+        /// Rewrite the baseline from this run (after review).
+        #[arg(long)]
+        update: bool,
+        /// Where the baseline scenes are recorded.
+        #[arg(long, default_value = "recordings/regress")]
+        out: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -72,6 +131,27 @@ fn main() -> ExitCode {
         Command::Designs { json } => commands::list(gyro_sim::library::DESIGNS, "designs", json),
         Command::Scenes { json } => commands::list(gyro_sim::library::SCENES, "scenes", json),
         Command::Inspect { recording, json } => commands::inspect(&recording, json),
+        Command::Analyze { runs, json, table } => commands::analyze(&runs, json, table.as_deref()),
+        Command::Compare {
+            runs,
+            out,
+            markdown,
+        } => commands::compare(&runs, &out, markdown),
+        Command::View {
+            runs,
+            save,
+            spawn: _,
+            connect,
+            tilt_exaggeration,
+            json,
+        } => commands::view(&runs, save, connect, tilt_exaggeration, json),
+        Command::Regress {
+            runs,
+            baseline,
+            update,
+            out,
+            json,
+        } => commands::regress(&runs, &baseline, update, &out, json),
     };
     match result {
         Ok(code) => code,

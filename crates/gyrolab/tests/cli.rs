@@ -1,0 +1,165 @@
+//! The command line as a user meets it: exit codes, JSON output, Ctrl-C, and the regression
+//! check against the committed baseline (what CI runs on a small, fast scene set).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn gyrolab() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_gyrolab"));
+    c.current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+    c
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gyrolab-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).expect("tmp");
+    d
+}
+
+#[test]
+fn bad_input_exits_2_with_a_message_naming_the_file() {
+    let d = tmp("bad");
+    let scene = d.join("s.toml");
+    std::fs::write(&scene, "name = \"x\"\nduration_s = 10.0\n[start]\nlatitude_deg = 95.0\n[compass]\ndesign = \"anschutz-1906\"\n").expect("write");
+    let out = gyrolab()
+        .arg("run")
+        .arg(&scene)
+        .arg("-o")
+        .arg(d.join("x.mcap"))
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("s.toml:4:") && err.contains("latitude_deg"),
+        "{err}"
+    );
+    assert!(
+        !d.join("x.mcap").exists() && !d.join("x.mcap.partial").exists(),
+        "no output for bad input"
+    );
+    let out = gyrolab()
+        .args(["run", "harbour-50n", "--fidelity", "exact"])
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    let out = gyrolab()
+        .args(["inspect", "Cargo.toml"])
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2), "a foreign file is bad input");
+}
+
+#[test]
+fn run_then_inspect_and_analyze_in_json() {
+    let d = tmp("run");
+    let file = d.join("h.mcap");
+    let out = gyrolab()
+        .args(["run", "harbour-50n", "--json", "--duration-s", "7200", "-o"])
+        .arg(&file)
+        .output()
+        .expect("runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(
+        v["effects"],
+        serde_json::json!(["earth_rotation", "damper", "friction"])
+    );
+    assert_eq!(v["samples"], 7201);
+    let out = gyrolab()
+        .args(["inspect", "--json"])
+        .arg(&file)
+        .output()
+        .expect("runs");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let topics: Vec<&str> = v["channels"]
+        .as_array()
+        .expect("channels")
+        .iter()
+        .filter_map(|c| c["topic"].as_str())
+        .collect();
+    for t in [
+        "/compass/state",
+        "/ship/state",
+        "/events",
+        "/solver/stats",
+        "/tf",
+    ] {
+        assert!(topics.contains(&t), "{t} missing: {topics:?}");
+    }
+    let out = gyrolab()
+        .args(["analyze", "--json"])
+        .arg(&file)
+        .output()
+        .expect("runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn ctrl_c_leaves_a_valid_recording_and_exits_130() {
+    let d = tmp("int");
+    let file = d.join("long.mcap");
+    let mut child = gyrolab()
+        .args([
+            "run",
+            "rolling-intercardinal",
+            "--quiet",
+            "--duration-s",
+            "864000",
+            "-o",
+        ])
+        .arg(&file)
+        .spawn()
+        .expect("spawn");
+    // Let it get going (it writes a .partial), then interrupt.
+    let partial = PathBuf::from(format!("{}.partial", file.display()));
+    for _ in 0..100 {
+        if partial.exists() {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(800));
+    let ok = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(ok.success());
+    let status = child.wait().expect("wait");
+    assert_eq!(status.code(), Some(130));
+    assert!(
+        file.exists() && !partial.exists(),
+        "final file written, partial renamed"
+    );
+    let rec = gyro_mcap::Recording::open(&file).expect("valid");
+    let status = &rec.metadata()["run"]["status"];
+    assert!(status.starts_with("interrupted at t = "), "{status}");
+    assert!(rec.read_records("/compass/state").expect("state").len() > 1);
+}
+
+#[test]
+fn regression_check_passes_against_the_committed_baseline() {
+    let d = tmp("regress");
+    let root = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+    let out = gyrolab()
+        .args(["regress", "--out"])
+        .arg(&d)
+        .arg("--baseline")
+        .arg(root.join("analysis/baseline.toml"))
+        .output()
+        .expect("runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "regress failed:\n{text}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
