@@ -6,7 +6,9 @@
 //! from the downward vertical in a vertical plane.
 
 use gyro_model::constants::STANDARD_GRAVITY_M_PER_S2 as G;
-use gyro_model::{CompiledModel, Design, Effects, Fidelity, InitialCondition, ModelOptions, Moored};
+use gyro_model::{
+    CompiledModel, Design, Effects, Fidelity, InitialCondition, ModelOptions, Moored,
+};
 
 const M: f64 = 2.0;
 const R: f64 = 0.3;
@@ -16,7 +18,11 @@ const I1: f64 = 0.7;
 
 fn design(servo: bool) -> Design {
     let (coords, table_angle, plate_angle) = if servo {
-        ("[[coordinate]]\nname = \"alpha\"\nservo = \"beta + pi/2\"\n[[coordinate]]\nname = \"beta\"\n", "alpha", "beta - alpha")
+        (
+            "[[coordinate]]\nname = \"alpha\"\nservo = \"beta + pi/2\"\n[[coordinate]]\nname = \"beta\"\n",
+            "alpha",
+            "beta - alpha",
+        )
     } else {
         ("[[coordinate]]\nname = \"beta\"\n", "beta + pi/2", "-pi/2")
     };
@@ -52,8 +58,16 @@ axis = [1.0, 0.0, 0.0]
 fn model(servo: bool) -> CompiledModel<Moored> {
     CompiledModel::compile(
         design(servo),
-        Moored { latitude_rad: 0.5, heading_rad: 0.0 },
-        ModelOptions { fidelity: Fidelity::Full, effects: Effects::default(), pivot_m: [0.0; 3], initial: InitialCondition::default() },
+        Moored {
+            latitude_rad: 0.5,
+            heading_rad: 0.0,
+        },
+        ModelOptions {
+            fidelity: Fidelity::Full,
+            effects: Effects::default(),
+            pivot_m: [0.0; 3],
+            initial: InitialCondition::default(),
+        },
     )
     .expect("compiles")
 }
@@ -62,7 +76,11 @@ fn model(servo: bool) -> CompiledModel<Moored> {
 fn servo_and_rigid_contact_give_beghins_two_equations() {
     let servo = model(true);
     let rigid = model(false);
-    assert_eq!(servo.independent.len(), 1, "the driven turntable has no equation of its own");
+    assert_eq!(
+        servo.independent.len(),
+        1,
+        "the driven turntable has no equation of its own"
+    );
     let f = M * G;
     let mut worst: f64 = 0.0;
     for k in 0..25 {
@@ -71,17 +89,24 @@ fn servo_and_rigid_contact_give_beghins_two_equations() {
             let mut dx = [0.0; 2];
             assert!(servo.rhs(0.0, &[beta, rate], &mut dx));
             // M(b² + k²)β″ − MRbβ′² + F b sin β = 0
-            let expect_servo = (M * R * B * rate * rate - f * B * beta.sin()) / (M * (B * B + K * K));
+            let expect_servo =
+                (M * R * B * rate * rate - f * B * beta.sin()) / (M * (B * B + K * K));
             assert!(rigid.rhs(0.0, &[beta, rate], &mut dx.clone()));
             let mut dr = [0.0; 2];
             rigid.rhs(0.0, &[beta, rate], &mut dr);
             // [M(R² + b² + k²) + I₁]β″ + F(b sin β + R cos β) = 0
-            let expect_rigid = -f * (B * beta.sin() + R * beta.cos()) / (M * (R * R + B * B + K * K) + I1);
+            let expect_rigid =
+                -f * (B * beta.sin() + R * beta.cos()) / (M * (R * R + B * B + K * K) + I1);
             let scale = f * (B + R) / (M * K * K) + rate * rate;
-            worst = worst.max((dx[1] - expect_servo).abs() / scale).max((dr[1] - expect_rigid).abs() / scale);
+            worst = worst
+                .max((dx[1] - expect_servo).abs() / scale)
+                .max((dr[1] - expect_rigid).abs() / scale);
         }
     }
-    assert!(worst < 1e-13, "engine vs Beghin §17: worst relative difference {worst:e}");
+    assert!(
+        worst < 1e-13,
+        "engine vs Beghin §17: worst relative difference {worst:e}"
+    );
 }
 
 #[test]
@@ -93,5 +118,10 @@ fn substituting_the_servo_first_would_be_the_rigid_contact() {
     let (mut a, mut b) = ([0.0; 2], [0.0; 2]);
     servo.rhs(0.0, &[0.4, 1.5], &mut a);
     rigid.rhs(0.0, &[0.4, 1.5], &mut b);
-    assert!((a[1] - b[1]).abs() > 1.0, "servo {} vs rigid {}", a[1], b[1]);
+    assert!(
+        (a[1] - b[1]).abs() > 1.0,
+        "servo {} vs rigid {}",
+        a[1],
+        b[1]
+    );
 }
