@@ -102,7 +102,7 @@ impl Recoverer {
             Ok(records) => records,
             Err(e) => return Ok(Err(e)),
         };
-        self.sink.flush_chunk()?;
+        self.sink.close_chunk()?;
         for (opcode, range) in records {
             let body_start = range.start + 9;
             let raw = RawRecord {
@@ -121,7 +121,7 @@ impl Recoverer {
                 return Ok(Err(ParseError::new(r.offset, "chunk", e.expected)));
             }
         }
-        self.sink.flush_chunk()?;
+        self.sink.close_chunk()?;
         self.chunks += 1;
         Ok(Ok(()))
     }

@@ -5,6 +5,9 @@ use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, mpsc};
+use std::thread::JoinHandle;
 use std::time::Instant;
 
 use crate::error::{RecordingError, io_error};
@@ -82,13 +85,317 @@ struct SinkChannel {
     chunk_index: Vec<(u64, u64)>,
 }
 
-/// MCAP records to a file: chunks with message indexes, then DataEnd, summary and footer.
-pub(crate) struct Sink {
-    out: Out,
-    chunk_size: usize,
-    compressor: zstd::bulk::Compressor<'static>,
-    chunk: Vec<u8>,
+/// A closed chunk on its way to the file: its records, time range and message indexes, and
+/// (after the compressing stage) its compressed bytes and CRC.
+#[derive(Default)]
+struct ChunkJob {
+    records: Vec<u8>,
+    start_time: u64,
+    end_time: u64,
+    /// The encoded message index records, one per channel with messages in the chunk.
+    indexes: Vec<u8>,
+    /// (channel id, offset of its message index record within `indexes`).
+    index_offsets: Vec<(u16, u64)>,
     compressed: Vec<u8>,
+    uncompressed_crc: u32,
+}
+
+/// Work for the file side, done in the order it was sent.
+enum Job {
+    /// Records to append as they are (header, schemas, channels).
+    Bytes(Vec<u8>),
+    Metadata {
+        record: Vec<u8>,
+        name: String,
+    },
+    Attachment {
+        record: Vec<u8>,
+        log_time: u64,
+        create_time: u64,
+        data_len: u64,
+        name: String,
+        media_type: String,
+    },
+    Chunk(ChunkJob),
+    /// Compressing a chunk failed.
+    Failed(RecordingError),
+    /// Reply (true = every job so far succeeded) once everything before it is written and
+    /// handed to the operating system.
+    Sync(mpsc::SyncSender<bool>),
+}
+
+/// Compresses a chunk in place (`compressed`, `uncompressed_crc`).
+fn compress(
+    compressor: &mut zstd::bulk::Compressor<'static>,
+    c: &mut ChunkJob,
+    path: &Path,
+) -> Result<(), RecordingError> {
+    c.uncompressed_crc = crc32fast::hash(&c.records);
+    c.compressed.clear();
+    c.compressed
+        .reserve(zstd::zstd_safe::compress_bound(c.records.len()));
+    compressor
+        .compress_to_buffer(&c.records, &mut c.compressed)
+        .map(drop)
+        .map_err(io_error(path, "compressing a chunk"))
+}
+
+/// The file side of a sink: the file, and everything whose value depends on positions in it
+/// (chunk, attachment and metadata indexes). Runs on a writer thread fed by compressing threads
+/// (see [`spawn_workers`]); the summary is written after it is joined.
+struct FileSide {
+    out: Out,
+    chunk_index_records: Vec<u8>,
+    attachment_index_records: Vec<u8>,
+    metadata_index_records: Vec<u8>,
+    chunk_count: u32,
+    attachment_count: u32,
+    metadata_count: u32,
+}
+
+impl FileSide {
+    fn apply(&mut self, job: &mut Job) -> Result<(), RecordingError> {
+        match job {
+            Job::Bytes(b) => self.out.emit(b),
+            Job::Metadata { record, name } => {
+                let offset = self.out.pos;
+                self.out.emit(record)?;
+                let ix = &mut self.metadata_index_records;
+                let at = begin_record(ix, op::METADATA_INDEX);
+                put_u64(ix, offset);
+                put_u64(ix, record.len() as u64);
+                put_str(ix, name);
+                end_record(ix, at);
+                self.metadata_count += 1;
+                Ok(())
+            }
+            Job::Attachment {
+                record,
+                log_time,
+                create_time,
+                data_len,
+                name,
+                media_type,
+            } => {
+                let offset = self.out.pos;
+                self.out.emit(record)?;
+                let ix = &mut self.attachment_index_records;
+                let at = begin_record(ix, op::ATTACHMENT_INDEX);
+                put_u64(ix, offset);
+                put_u64(ix, record.len() as u64);
+                put_u64(ix, *log_time);
+                put_u64(ix, *create_time);
+                put_u64(ix, *data_len);
+                put_str(ix, name);
+                put_str(ix, media_type);
+                end_record(ix, at);
+                self.attachment_count += 1;
+                Ok(())
+            }
+            Job::Chunk(c) => self.write_chunk(c),
+            Job::Failed(e) => Err(std::mem::replace(
+                e,
+                RecordingError::Usage {
+                    path: self.out.path.clone(),
+                    call: "compressing".into(),
+                    expected: "an error reported once".into(),
+                },
+            )),
+            Job::Sync(_) => self
+                .out
+                .file
+                .flush()
+                .map_err(io_error(&self.out.path, "flushing")),
+        }
+    }
+
+    /// Writes a compressed chunk with its message indexes, then hands the bytes to the
+    /// operating system (so they survive the process being killed).
+    fn write_chunk(&mut self, c: &ChunkJob) -> Result<(), RecordingError> {
+        let chunk_start = self.out.pos;
+        let mut head = Vec::with_capacity(64);
+        head.push(op::CHUNK);
+        let body_len = 8 + 8 + 8 + 4 + (4 + 4) + 8 + c.compressed.len();
+        put_u64(&mut head, body_len as u64);
+        put_u64(&mut head, c.start_time);
+        put_u64(&mut head, c.end_time);
+        put_u64(&mut head, c.records.len() as u64);
+        put_u32(&mut head, c.uncompressed_crc);
+        put_str(&mut head, "zstd");
+        put_u64(&mut head, c.compressed.len() as u64);
+        self.out.emit(&head)?;
+        self.out.emit(&c.compressed)?;
+        let chunk_length = self.out.pos - chunk_start;
+        let index_start = self.out.pos;
+        self.out.emit(&c.indexes)?;
+
+        let b = &mut self.chunk_index_records;
+        let at = begin_record(b, op::CHUNK_INDEX);
+        put_u64(b, c.start_time);
+        put_u64(b, c.end_time);
+        put_u64(b, chunk_start);
+        put_u64(b, chunk_length);
+        put_u32(b, len32(c.index_offsets.len() * 10));
+        for &(id, o) in &c.index_offsets {
+            put_u16(b, id);
+            put_u64(b, index_start + o);
+        }
+        put_u64(b, c.indexes.len() as u64);
+        put_str(b, "zstd");
+        put_u64(b, c.compressed.len() as u64);
+        put_u64(b, c.records.len() as u64);
+        end_record(b, at);
+        self.chunk_count += 1;
+        self.out
+            .file
+            .flush()
+            .map_err(io_error(&self.out.path, "flushing a chunk"))
+    }
+}
+
+/// Where the file side runs: on worker threads (the usual case), inline (when no thread could
+/// be started), or nowhere (after it failed or was joined).
+enum FileHandle {
+    Inline {
+        side: Box<FileSide>,
+        compressor: zstd::bulk::Compressor<'static>,
+    },
+    Workers(Workers),
+    Gone,
+}
+
+/// The threads of a sink: job `n` goes to compressing thread `n % k`, which compresses chunks
+/// and passes everything on; the writer thread takes job `n` from thread `n % k`, so the file is
+/// written in submission order while `k` chunks compress at once.
+struct Workers {
+    inputs: Vec<mpsc::SyncSender<Job>>,
+    next: usize,
+    /// Chunk buffers the writer is done with, for reuse.
+    recycled: mpsc::Receiver<ChunkJob>,
+    failed: Arc<AtomicBool>,
+    compressors: Vec<JoinHandle<()>>,
+    writer: JoinHandle<(Box<FileSide>, Option<RecordingError>)>,
+}
+
+/// Jobs queued per compressing thread beyond the one it works on: enough to ride out a slow
+/// write, few enough that a killed process loses only milliseconds more than the open chunk.
+const QUEUED_PER_THREAD: usize = 1;
+
+/// How many chunks compress at once: one per core, at most four.
+fn compressing_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get().clamp(1, 4))
+}
+
+fn spawn_workers(
+    side: Box<FileSide>,
+    zstd_level: i32,
+    path: &Path,
+) -> Result<Workers, Box<FileSide>> {
+    let k = compressing_threads();
+    let failed = Arc::new(AtomicBool::new(false));
+    let mut inputs = Vec::with_capacity(k);
+    let mut outputs = Vec::with_capacity(k);
+    let mut compressors = Vec::with_capacity(k);
+    for i in 0..k {
+        let Ok(mut compressor) = zstd::bulk::Compressor::new(zstd_level) else {
+            return Err(side);
+        };
+        let (tx, rx) = mpsc::sync_channel::<Job>(QUEUED_PER_THREAD);
+        let (out_tx, out_rx) = mpsc::sync_channel::<Job>(QUEUED_PER_THREAD);
+        let path = path.to_path_buf();
+        let spawned = std::thread::Builder::new()
+            .name(format!("gyro-mcap-zstd-{i}"))
+            .spawn(move || {
+                for mut job in rx {
+                    if let Job::Chunk(c) = &mut job
+                        && let Err(e) = compress(&mut compressor, c, &path)
+                    {
+                        job = Job::Failed(e);
+                    }
+                    if out_tx.send(job).is_err() {
+                        break;
+                    }
+                }
+            });
+        match spawned {
+            Ok(h) => compressors.push(h),
+            // Dropping the senders ends the threads already started.
+            Err(_) => return Err(side),
+        }
+        inputs.push(tx);
+        outputs.push(out_rx);
+    }
+    let (recycle, recycled) = mpsc::channel::<ChunkJob>();
+    let flag = Arc::clone(&failed);
+    // The side moves into the writer thread; if it cannot start, it comes back through here.
+    let slot = Arc::new(std::sync::Mutex::new(Some(side)));
+    let theirs = Arc::clone(&slot);
+    let spawned = std::thread::Builder::new()
+        .name("gyro-mcap-write".into())
+        .spawn(move || {
+            let mut side = theirs
+                .lock()
+                .ok()
+                .and_then(|mut s| s.take())
+                .expect("the file side is handed to the writer once");
+            let mut error = None;
+            for n in 0.. {
+                // Job n is on output n % k; a closed output means no job n was sent.
+                let Ok(mut job) = outputs[n % outputs.len()].recv() else {
+                    break;
+                };
+                if error.is_none()
+                    && let Err(e) = side.apply(&mut job)
+                {
+                    error = Some(e);
+                    flag.store(true, Ordering::Release);
+                }
+                match job {
+                    Job::Sync(reply) => {
+                        let _ = reply.send(error.is_none());
+                    }
+                    Job::Chunk(mut c) => {
+                        c.records.clear();
+                        c.indexes.clear();
+                        c.index_offsets.clear();
+                        let _ = recycle.send(c);
+                    }
+                    _ => {}
+                }
+            }
+            (side, error)
+        });
+    match spawned {
+        Ok(writer) => Ok(Workers {
+            inputs,
+            next: 0,
+            recycled,
+            failed,
+            compressors,
+            writer,
+        }),
+        Err(_) => {
+            drop(inputs);
+            for h in compressors {
+                let _ = h.join();
+            }
+            Err(slot
+                .lock()
+                .ok()
+                .and_then(|mut s| s.take())
+                .expect("the side is still here when the writer did not start"))
+        }
+    }
+}
+
+/// MCAP records to a file: chunks with message indexes, then DataEnd, summary and footer. The
+/// caller's side (this struct) encodes messages into the open chunk and keeps per-channel
+/// statistics; the file side compresses and writes, on a worker thread.
+pub(crate) struct Sink {
+    path: PathBuf,
+    file: FileHandle,
+    chunk_size: usize,
+    chunk: Vec<u8>,
     chunk_start_time: u64,
     chunk_end_time: u64,
     touched: Vec<usize>,
@@ -97,17 +404,10 @@ pub(crate) struct Sink {
     /// Summary records, already encoded, by group.
     schema_records: Vec<u8>,
     channel_records: Vec<u8>,
-    chunk_index_records: Vec<u8>,
-    attachment_index_records: Vec<u8>,
-    metadata_index_records: Vec<u8>,
     schemas: Vec<(String, String, Vec<u8>)>,
     message_count: u64,
     message_start_time: u64,
     message_end_time: u64,
-    chunk_count: u32,
-    attachment_count: u32,
-    metadata_count: u32,
-    scratch: Vec<u8>,
 }
 
 impl Sink {
@@ -120,17 +420,29 @@ impl Sink {
         let compressor = zstd::bulk::Compressor::new(zstd_level)
             .map_err(io_error(path, "setting up zstd compression"))?;
         let chunk_size = usize::try_from(chunk_size.clamp(1, 1 << 30)).unwrap_or(1 << 20);
-        let mut sink = Self {
+        let side = Box::new(FileSide {
             out: Out {
                 path: path.to_path_buf(),
                 file: BufWriter::with_capacity(1 << 16, file),
                 pos: 0,
                 crc: crc32fast::Hasher::new(),
             },
+            chunk_index_records: Vec::new(),
+            attachment_index_records: Vec::new(),
+            metadata_index_records: Vec::new(),
+            chunk_count: 0,
+            attachment_count: 0,
+            metadata_count: 0,
+        });
+        let file = match spawn_workers(side, zstd_level, path) {
+            Ok(workers) => FileHandle::Workers(workers),
+            Err(side) => FileHandle::Inline { side, compressor },
+        };
+        let mut sink = Self {
+            path: path.to_path_buf(),
+            file,
             chunk_size,
-            compressor,
             chunk: Vec::with_capacity(chunk_size + 4096),
-            compressed: Vec::new(),
             chunk_start_time: u64::MAX,
             chunk_end_time: 0,
             touched: Vec::new(),
@@ -138,20 +450,12 @@ impl Sink {
             slot_of_id: HashMap::new(),
             schema_records: Vec::new(),
             channel_records: Vec::new(),
-            chunk_index_records: Vec::new(),
-            attachment_index_records: Vec::new(),
-            metadata_index_records: Vec::new(),
             schemas: Vec::new(),
             message_count: 0,
             message_start_time: u64::MAX,
             message_end_time: 0,
-            chunk_count: 0,
-            attachment_count: 0,
-            metadata_count: 0,
-            scratch: Vec::new(),
         };
-        sink.out.emit(MAGIC)?;
-        let mut b = Vec::new();
+        let mut b = MAGIC.to_vec();
         let at = begin_record(&mut b, op::HEADER);
         put_str(&mut b, ""); // profile: none of the well-known ones
         put_str(
@@ -159,16 +463,95 @@ impl Sink {
             concat!("gyrolab gyro-mcap ", env!("CARGO_PKG_VERSION")),
         );
         end_record(&mut b, at);
-        sink.out.emit(&b)?;
+        sink.submit(Job::Bytes(b))?;
         Ok(sink)
     }
 
     pub(crate) fn path(&self) -> &Path {
-        &self.out.path
+        &self.path
     }
 
     pub(crate) fn message_count(&self) -> u64 {
         self.message_count
+    }
+
+    /// Hands a job to the file side (in order); a failure of the file side, now or earlier,
+    /// comes back here.
+    fn submit(&mut self, mut job: Job) -> Result<(), RecordingError> {
+        match &mut self.file {
+            FileHandle::Inline { side, compressor } => {
+                let mut r = match &mut job {
+                    Job::Chunk(c) => compress(compressor, c, &self.path),
+                    _ => Ok(()),
+                };
+                if r.is_ok() {
+                    r = side.apply(&mut job);
+                }
+                if let Job::Sync(reply) = job {
+                    let _ = reply.send(r.is_ok());
+                }
+                r
+            }
+            FileHandle::Workers(w) => {
+                let k = w.inputs.len();
+                if w.failed.load(Ordering::Acquire) || w.inputs[w.next % k].send(job).is_err() {
+                    return Err(self.worker_error());
+                }
+                w.next += 1;
+                Ok(())
+            }
+            FileHandle::Gone => Err(self.gone()),
+        }
+    }
+
+    /// Waits until everything submitted is written and handed to the operating system.
+    fn sync(&mut self) -> Result<(), RecordingError> {
+        let (reply, answer) = mpsc::sync_channel(1);
+        self.submit(Job::Sync(reply))?;
+        match answer.recv() {
+            Ok(true) => Ok(()),
+            _ => Err(self.worker_error()),
+        }
+    }
+
+    /// Stops the worker and returns the file side, or the error that stopped it.
+    fn join(&mut self) -> Result<Box<FileSide>, RecordingError> {
+        match std::mem::replace(&mut self.file, FileHandle::Gone) {
+            FileHandle::Inline { side, .. } => Ok(side),
+            FileHandle::Workers(w) => {
+                drop(w.inputs);
+                for h in w.compressors {
+                    let _ = h.join();
+                }
+                match w.writer.join() {
+                    Ok((side, None)) => Ok(side),
+                    Ok((_, Some(e))) => Err(e),
+                    Err(_) => Err(RecordingError::Usage {
+                        path: self.path.clone(),
+                        call: "writing".into(),
+                        expected: "a writer thread that does not panic".into(),
+                    }),
+                }
+            }
+            FileHandle::Gone => Err(self.gone()),
+        }
+    }
+
+    /// The error that stopped the worker (it is joined; later calls get [`Self::gone`]).
+    #[cold]
+    fn worker_error(&mut self) -> RecordingError {
+        match self.join() {
+            Err(e) => e,
+            Ok(_) => self.gone(),
+        }
+    }
+
+    #[cold]
+    fn gone(&self) -> RecordingError {
+        self.usage(
+            "writing",
+            "a writer whose file has not failed or been finished",
+        )
     }
 
     /// Adds a schema (or returns the id of an identical one). Ids start at 1.
@@ -197,8 +580,8 @@ impl Sink {
         put_str(&mut b, encoding);
         put_bytes32(&mut b, data);
         end_record(&mut b, at);
-        self.out.emit(&b)?;
         self.schema_records.extend_from_slice(&b);
+        self.submit(Job::Bytes(b))?;
         self.schemas
             .push((name.to_owned(), encoding.to_owned(), data.to_vec()));
         Ok(id)
@@ -224,8 +607,8 @@ impl Sink {
         put_str(&mut b, message_encoding);
         put_str_map(&mut b, metadata);
         end_record(&mut b, at);
-        self.out.emit(&b)?;
         self.channel_records.extend_from_slice(&b);
+        self.submit(Job::Bytes(b))?;
         let slot = self.channels.len();
         self.channels.push(SinkChannel {
             id,
@@ -248,7 +631,7 @@ impl Sink {
 
     fn usage(&self, call: impl Into<String>, expected: impl Into<String>) -> RecordingError {
         RecordingError::Usage {
-            path: self.out.path.clone(),
+            path: self.path.clone(),
             call: call.into(),
             expected: expected.into(),
         }
@@ -293,85 +676,51 @@ impl Sink {
         self.chunk.len() >= self.chunk_size
     }
 
-    /// Compresses and writes the open chunk with its message indexes, then hands the bytes to the
-    /// operating system (so they survive the process being killed).
-    pub(crate) fn flush_chunk(&mut self) -> Result<(), RecordingError> {
+    /// Closes the open chunk and queues it for compression and writing; returns at once (the
+    /// worker writes it within milliseconds). A failed earlier write is reported here.
+    pub(crate) fn close_chunk(&mut self) -> Result<(), RecordingError> {
         if self.chunk.is_empty() {
             return Ok(());
         }
-        let uncompressed_crc = crc32fast::hash(&self.chunk);
-        self.compressed.clear();
-        self.compressed
-            .reserve(zstd::zstd_safe::compress_bound(self.chunk.len()));
-        self.compressor
-            .compress_to_buffer(&self.chunk, &mut self.compressed)
-            .map_err(io_error(&self.out.path, "compressing a chunk"))?;
-        let chunk_start = self.out.pos;
-        let mut head = Vec::with_capacity(64);
-        head.push(op::CHUNK);
-        let body_len = 8 + 8 + 8 + 4 + (4 + 4) + 8 + self.compressed.len();
-        put_u64(&mut head, body_len as u64);
-        put_u64(&mut head, self.chunk_start_time);
-        put_u64(&mut head, self.chunk_end_time);
-        put_u64(&mut head, self.chunk.len() as u64);
-        put_u32(&mut head, uncompressed_crc);
-        put_str(&mut head, "zstd");
-        put_u64(&mut head, self.compressed.len() as u64);
-        self.out.emit(&head)?;
-        self.out.emit(&self.compressed)?;
-        let chunk_length = self.out.pos - chunk_start;
-
+        let mut job = match &self.file {
+            FileHandle::Workers(w) => w.recycled.try_recv().ok(),
+            _ => None,
+        }
+        .unwrap_or_default();
+        if job.records.capacity() == 0 {
+            job.records.reserve(self.chunk_size + 4096);
+        }
+        std::mem::swap(&mut job.records, &mut self.chunk);
+        job.start_time = self.chunk_start_time;
+        job.end_time = self.chunk_end_time;
         // Message indexes, one per channel in this chunk.
-        let index_start = self.out.pos;
-        let mut offsets = Vec::with_capacity(self.touched.len());
-        self.scratch.clear();
         for &slot in &self.touched {
             let ch = &mut self.channels[slot];
-            offsets.push((ch.id, index_start + self.scratch.len() as u64));
-            self.scratch.push(op::MESSAGE_INDEX);
-            put_u64(
-                &mut self.scratch,
-                (2 + 4 + 16 * ch.chunk_index.len()) as u64,
-            );
-            put_u16(&mut self.scratch, ch.id);
-            put_u32(&mut self.scratch, len32(16 * ch.chunk_index.len()));
+            job.index_offsets.push((ch.id, job.indexes.len() as u64));
+            let b = &mut job.indexes;
+            b.push(op::MESSAGE_INDEX);
+            put_u64(b, (2 + 4 + 16 * ch.chunk_index.len()) as u64);
+            put_u16(b, ch.id);
+            put_u32(b, len32(16 * ch.chunk_index.len()));
             for &(t, o) in &ch.chunk_index {
-                put_u64(&mut self.scratch, t);
-                put_u64(&mut self.scratch, o);
+                put_u64(b, t);
+                put_u64(b, o);
             }
             ch.chunk_index.clear();
         }
         self.touched.clear();
-        self.out.emit(&self.scratch)?;
-        let index_length = self.scratch.len() as u64;
-
-        let b = &mut self.chunk_index_records;
-        let at = begin_record(b, op::CHUNK_INDEX);
-        put_u64(b, self.chunk_start_time);
-        put_u64(b, self.chunk_end_time);
-        put_u64(b, chunk_start);
-        put_u64(b, chunk_length);
-        put_u32(b, len32(offsets.len() * 10));
-        for (id, o) in offsets {
-            put_u16(b, id);
-            put_u64(b, o);
-        }
-        put_u64(b, index_length);
-        put_str(b, "zstd");
-        put_u64(b, self.compressed.len() as u64);
-        put_u64(b, self.chunk.len() as u64);
-        end_record(b, at);
-
         self.message_start_time = self.message_start_time.min(self.chunk_start_time);
         self.message_end_time = self.message_end_time.max(self.chunk_end_time);
-        self.chunk_count += 1;
-        self.chunk.clear();
         self.chunk_start_time = u64::MAX;
         self.chunk_end_time = 0;
-        self.out
-            .file
-            .flush()
-            .map_err(io_error(&self.out.path, "flushing a chunk"))
+        self.submit(Job::Chunk(job))
+    }
+
+    /// Closes the open chunk and waits until it (and everything before it) is written and
+    /// handed to the operating system, so it survives the process being killed.
+    pub(crate) fn flush_chunk(&mut self) -> Result<(), RecordingError> {
+        self.close_chunk()?;
+        self.sync()
     }
 
     pub(crate) fn write_metadata(
@@ -384,16 +733,10 @@ impl Sink {
         put_str(&mut b, name);
         put_str_map(&mut b, entries);
         end_record(&mut b, at);
-        let offset = self.out.pos;
-        self.out.emit(&b)?;
-        let ix = &mut self.metadata_index_records;
-        let at = begin_record(ix, op::METADATA_INDEX);
-        put_u64(ix, offset);
-        put_u64(ix, b.len() as u64);
-        put_str(ix, name);
-        end_record(ix, at);
-        self.metadata_count += 1;
-        Ok(())
+        self.submit(Job::Metadata {
+            record: b,
+            name: name.to_owned(),
+        })
     }
 
     pub(crate) fn attach(
@@ -415,45 +758,41 @@ impl Sink {
         let crc = crc32fast::hash(&b[at + 8..]);
         put_u32(&mut b, crc);
         end_record(&mut b, at);
-        let offset = self.out.pos;
-        self.out.emit(&b)?;
-        let ix = &mut self.attachment_index_records;
-        let at = begin_record(ix, op::ATTACHMENT_INDEX);
-        put_u64(ix, offset);
-        put_u64(ix, b.len() as u64);
-        put_u64(ix, log_time);
-        put_u64(ix, create_time);
-        put_u64(ix, data.len() as u64);
-        put_str(ix, name);
-        put_str(ix, media_type);
-        end_record(ix, at);
-        self.attachment_count += 1;
-        Ok(())
+        self.submit(Job::Attachment {
+            record: b,
+            log_time,
+            create_time,
+            data_len: data.len() as u64,
+            name: name.to_owned(),
+            media_type: media_type.to_owned(),
+        })
     }
 
     /// Writes the last chunk, DataEnd, the summary section with its offsets, the footer and the
     /// closing magic; syncs the file to disk. Returns the file size.
     pub(crate) fn finish(&mut self) -> Result<u64, RecordingError> {
-        self.flush_chunk()?;
-        let data_crc = self.out.crc.clone().finalize();
+        self.close_chunk()?;
+        let mut side = self.join()?;
+        let out = &mut side.out;
+        let data_crc = out.crc.clone().finalize();
         let mut b = Vec::new();
         let at = begin_record(&mut b, op::DATA_END);
         put_u32(&mut b, data_crc);
         end_record(&mut b, at);
-        self.out.emit(&b)?;
+        out.emit(&b)?;
         // The summary CRC covers the summary section and the footer up to its CRC field.
-        self.out.crc = crc32fast::Hasher::new();
+        out.crc = crc32fast::Hasher::new();
 
         // Summary: each group, remembering where it went for the summary offsets.
-        let summary_start = self.out.pos;
+        let summary_start = out.pos;
         let mut statistics = Vec::new();
         let at = begin_record(&mut statistics, op::STATISTICS);
         put_u64(&mut statistics, self.message_count);
         put_u16(&mut statistics, self.schemas.len() as u16);
         put_u32(&mut statistics, self.channels.len() as u32);
-        put_u32(&mut statistics, self.attachment_count);
-        put_u32(&mut statistics, self.metadata_count);
-        put_u32(&mut statistics, self.chunk_count);
+        put_u32(&mut statistics, side.attachment_count);
+        put_u32(&mut statistics, side.metadata_count);
+        put_u32(&mut statistics, side.chunk_count);
         let (start, end) = if self.message_count == 0 {
             (0, 0)
         } else {
@@ -477,17 +816,18 @@ impl Sink {
             (op::STATISTICS, statistics),
             (
                 op::CHUNK_INDEX,
-                std::mem::take(&mut self.chunk_index_records),
+                std::mem::take(&mut side.chunk_index_records),
             ),
             (
                 op::ATTACHMENT_INDEX,
-                std::mem::take(&mut self.attachment_index_records),
+                std::mem::take(&mut side.attachment_index_records),
             ),
             (
                 op::METADATA_INDEX,
-                std::mem::take(&mut self.metadata_index_records),
+                std::mem::take(&mut side.metadata_index_records),
             ),
         ];
+        let out = &mut side.out;
         let mut offsets = Vec::new();
         for (opcode, bytes) in &groups {
             if bytes.is_empty() {
@@ -495,32 +835,35 @@ impl Sink {
             }
             let at = begin_record(&mut offsets, op::SUMMARY_OFFSET);
             offsets.push(*opcode);
-            put_u64(&mut offsets, self.out.pos);
+            put_u64(&mut offsets, out.pos);
             put_u64(&mut offsets, bytes.len() as u64);
             end_record(&mut offsets, at);
-            self.out.emit(bytes)?;
+            out.emit(bytes)?;
         }
-        let summary_offset_start = self.out.pos;
-        self.out.emit(&offsets)?;
+        let summary_offset_start = out.pos;
+        out.emit(&offsets)?;
         let mut footer = Vec::new();
         footer.push(op::FOOTER);
         put_u64(&mut footer, 8 + 8 + 4);
         put_u64(&mut footer, summary_start);
         put_u64(&mut footer, summary_offset_start);
-        self.out.emit(&footer)?;
-        let summary_crc = self.out.crc.clone().finalize();
-        self.out.emit(&summary_crc.to_le_bytes())?;
-        self.out.emit(MAGIC)?;
-        self.out
-            .file
-            .flush()
-            .map_err(io_error(&self.out.path, "flushing"))?;
-        self.out
-            .file
+        out.emit(&footer)?;
+        let summary_crc = out.crc.clone().finalize();
+        out.emit(&summary_crc.to_le_bytes())?;
+        out.emit(MAGIC)?;
+        out.file.flush().map_err(io_error(&out.path, "flushing"))?;
+        out.file
             .get_ref()
             .sync_all()
-            .map_err(io_error(&self.out.path, "syncing to disk"))?;
-        Ok(self.out.pos)
+            .map_err(io_error(&out.path, "syncing to disk"))?;
+        Ok(out.pos)
+    }
+}
+
+impl Drop for Sink {
+    /// Lets the worker write what it was given (the open chunk is the owner's business).
+    fn drop(&mut self) {
+        let _ = self.join();
     }
 }
 
@@ -793,20 +1136,29 @@ impl RecordingWriter {
     #[inline]
     fn after_message(&mut self) -> Result<(), RecordingError> {
         if self.sink.chunk_is_full() {
-            return self.flush_chunk();
+            return self.close_chunk();
         }
         self.since_clock_check += 1;
         if self.since_clock_check >= CLOCK_CHECK_EVERY {
             self.since_clock_check = 0;
             if self.last_flush.elapsed().as_secs_f64() >= self.flush_interval_s {
-                return self.flush_chunk();
+                return self.close_chunk();
             }
         }
         Ok(())
     }
 
-    /// Closes the open chunk now and hands it to the operating system (the writer also does this
-    /// by itself when a chunk is full or `flush_interval_s` has passed).
+    /// Closes the open chunk and queues it for the writer thread (no waiting).
+    fn close_chunk(&mut self) -> Result<(), RecordingError> {
+        self.last_flush = Instant::now();
+        self.since_clock_check = 0;
+        self.sink.close_chunk()
+    }
+
+    /// Closes the open chunk now and returns once it (and everything before it) is written and
+    /// handed to the operating system. The writer also closes chunks by itself when one is full
+    /// or `flush_interval_s` has passed; those are compressed and written by its thread while
+    /// the caller goes on.
     pub fn flush_chunk(&mut self) -> Result<(), RecordingError> {
         self.last_flush = Instant::now();
         self.since_clock_check = 0;
@@ -888,7 +1240,7 @@ impl Sink {
         let buf = self.begin_message(slot, Some(sequence), log_time, publish_time, data.len());
         buf.extend_from_slice(data);
         if self.chunk_is_full() {
-            self.flush_chunk()?;
+            self.close_chunk()?;
         }
         Ok(())
     }
