@@ -6,10 +6,19 @@ use std::time::Instant;
 
 use gyro_mcap::{FieldSpec, Pose, RecordSchema, Recording, RecordingWriter, WriterOptions};
 
-/// CPU seconds (user + system) this process has used, from /proc (0 where unavailable): on a
-/// shared machine, rates per CPU second say more than rates per wall second.
+/// CPU seconds (user + system) this process has used, all threads, from /proc (0 where
+/// unavailable): on a shared machine, rates per CPU second say more than rates per wall second.
 fn cpu_s() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    cpu_s_of("/proc/self/stat")
+}
+
+/// CPU seconds of the calling thread only (the one that encodes; compression runs on others).
+fn thread_cpu_s() -> f64 {
+    cpu_s_of("/proc/thread-self/stat")
+}
+
+fn cpu_s_of(file: &str) -> f64 {
+    let stat = std::fs::read_to_string(file).unwrap_or_default();
     let fields: Vec<&str> = stat
         .rsplit_once(')')
         .map_or("", |(_, rest)| rest)
@@ -68,6 +77,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let started = Instant::now();
     let cpu0 = cpu_s();
+    let thread_cpu0 = thread_cpu_s();
     let mut w = RecordingWriter::create(&path, opts)?;
     let rec_ch = w.add_record_channel("/compass", &schema)?;
     let pose_ch = w.add_pose_channel("/poses")?;
@@ -92,6 +102,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             payload_bytes += 110;
         }
     }
+    let encode_thread_cpu_s = thread_cpu_s() - thread_cpu0;
     let summary = w.finish()?;
     let write_s = started.elapsed().as_secs_f64();
     let write_cpu_s = cpu_s() - cpu0;
@@ -108,8 +119,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         summary.bytes as f64 / write_s / 1e6
     );
     println!(
-        "write per CPU second: {:.2} M msgs/s ({write_cpu_s:.2} CPU s)",
-        messages / write_cpu_s / 1e6
+        "write per CPU second: {:.2} M msgs/s ({write_cpu_s:.2} CPU s in all threads; the calling \
+         thread {encode_thread_cpu_s:.2} CPU s, {:.2} M msgs/s)",
+        messages / write_cpu_s / 1e6,
+        messages / encode_thread_cpu_s / 1e6
     );
     println!(
         "file: {:.1} MB, {:.2} MB per simulated hour ({:.1} bytes/message)",
@@ -138,6 +151,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     println!(
         "read per CPU second: {:.2} M msgs/s ({read_cpu_s:.2} CPU s)",
+        messages / read_cpu_s / 1e6
+    );
+
+    // Every channel in one pass (each chunk decompressed once), as a loader of whole runs does.
+    let started = Instant::now();
+    let cpu0 = cpu_s();
+    let rec = Recording::open(&path)?;
+    let open_s = started.elapsed().as_secs_f64();
+    let all = rec.read_all()?;
+    let read_s = started.elapsed().as_secs_f64();
+    let read_cpu_s = cpu_s() - cpu0;
+    let n: usize = all.values().map(|t| t.len()).sum();
+    assert_eq!(n, summary.messages as usize);
+    println!(
+        "read_all: {:.2} s ({:.2} M msgs/s, {:.0} MB/s of file; open {:.3} s, decode {:.2} M msgs/s)",
+        read_s,
+        messages / read_s / 1e6,
+        summary.bytes as f64 / read_s / 1e6,
+        open_s,
+        messages / (read_s - open_s) / 1e6
+    );
+    println!(
+        "read_all per CPU second: {:.2} M msgs/s ({read_cpu_s:.2} CPU s)",
         messages / read_cpu_s / 1e6
     );
     std::fs::remove_file(&path)?;

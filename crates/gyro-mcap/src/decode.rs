@@ -52,6 +52,22 @@ impl Column {
             Column::Str(v) => v.push(String::new()),
         }
     }
+    /// Appends the values of `other`, a column of the same kind (other kinds are ignored).
+    pub(crate) fn append(&mut self, other: Column) {
+        match (self, other) {
+            (Column::F64(a), Column::F64(mut b)) => a.append(&mut b),
+            (Column::U64(a), Column::U64(mut b)) => a.append(&mut b),
+            (Column::Str(a), Column::Str(mut b)) => a.append(&mut b),
+            _ => {}
+        }
+    }
+    fn pop(&mut self) {
+        match self {
+            Column::F64(v) => drop(v.pop()),
+            Column::U64(v) => drop(v.pop()),
+            Column::Str(v) => drop(v.pop()),
+        }
+    }
     pub(crate) fn permute(&mut self, order: &[usize]) {
         fn apply<T: Clone>(v: &mut Vec<T>, order: &[usize]) {
             *v = order.iter().map(|&i| v[i].clone()).collect();
@@ -103,9 +119,16 @@ pub(crate) struct RecordLayout {
     decodings: Vec<Decoding>,
     /// Field number → column, for numbers up to `MAX_INDEXED_NUMBER`.
     by_number: Vec<Option<u32>>,
+    /// (key, column) of every column by increasing field number: the order in which our writer
+    /// (and protobuf encoders generally) write fields, tried first by [`Self::decode_row`].
+    canonical: Vec<(u64, u32)>,
 }
 
 const MAX_INDEXED_NUMBER: i32 = 1 << 16;
+
+/// Rows reserved up front at most: counts come from an untrusted file's indexes (each row seen
+/// there is an index entry, so this only guards against absurd counts), beyond it vectors grow.
+pub(crate) const MAX_RESERVED_ROWS: usize = 1 << 24;
 
 impl RecordLayout {
     /// The layout of message `full_name` in an encoded FileDescriptorSet. Singular double, float,
@@ -121,6 +144,7 @@ impl RecordLayout {
             names: Vec::new(),
             decodings: Vec::new(),
             by_number: Vec::new(),
+            canonical: Vec::new(),
         };
         for field in &message.field {
             if field.label == Some(Label::Repeated as i32) {
@@ -151,11 +175,85 @@ impl RecordLayout {
             layout.names.push(field.name.clone().unwrap_or_default());
             layout.decodings.push(decoding);
         }
+        layout.canonical = layout
+            .by_number
+            .iter()
+            .enumerate()
+            .filter_map(|(number, col)| {
+                let col = (*col)?;
+                let wire = layout.decodings[col as usize].wire();
+                Some((((number as u64) << 3) | u64::from(wire), col))
+            })
+            .collect();
         Ok(layout)
     }
 
-    pub(crate) fn empty_columns(&self) -> Vec<Column> {
-        self.decodings.iter().map(|d| d.empty_column()).collect()
+    /// Appends one row decoded from `data`: first as the canonical encoding (every column once,
+    /// by increasing field number, nothing else), which is one pass with no lookups; anything
+    /// else goes through [`Self::decode_into`].
+    #[inline]
+    pub(crate) fn decode_row(&self, data: &[u8], columns: &mut [Column]) -> Result<(), String> {
+        let mut r = Wire::new(data);
+        let mut pushed = 0;
+        for &(key, col) in &self.canonical {
+            if !r.expect_key(key) {
+                break;
+            }
+            let col = col as usize;
+            let ok = match (&mut columns[col], self.decodings[col]) {
+                (Column::F64(v), Decoding::Double) => {
+                    r.fixed64().map(|x| v.push(f64::from_bits(x))).is_ok()
+                }
+                (Column::F64(v), Decoding::Float) => r
+                    .fixed32()
+                    .map(|x| v.push(f64::from(f32::from_bits(x))))
+                    .is_ok(),
+                (Column::U64(v), Decoding::Varint) => r.varint().map(|x| v.push(x)).is_ok(),
+                (Column::U64(v), Decoding::Bool) => {
+                    r.varint().map(|x| v.push(u64::from(x != 0))).is_ok()
+                }
+                (Column::U64(v), Decoding::Fixed64) => r.fixed64().map(|x| v.push(x)).is_ok(),
+                (Column::U64(v), Decoding::Fixed32) => {
+                    r.fixed32().map(|x| v.push(u64::from(x))).is_ok()
+                }
+                (Column::Str(v), Decoding::Str) => match r.len_delimited() {
+                    Ok(b) => match std::str::from_utf8(b) {
+                        Ok(s) => {
+                            v.push(s.to_owned());
+                            true
+                        }
+                        Err(_) => false,
+                    },
+                    Err(_) => false,
+                },
+                _ => false,
+            };
+            if !ok {
+                break;
+            }
+            pushed += 1;
+        }
+        if pushed == self.canonical.len() && r.done() {
+            return Ok(());
+        }
+        // Not canonical: undo and decode field by field.
+        for &(_, col) in &self.canonical[..pushed] {
+            columns[col as usize].pop();
+        }
+        self.decode_into(data, columns)
+    }
+
+    /// Empty columns with room for `n` rows (capped: `n` comes from the file's statistics).
+    pub(crate) fn columns_with_capacity(&self, n: usize) -> Vec<Column> {
+        let n = n.min(MAX_RESERVED_ROWS);
+        self.decodings
+            .iter()
+            .map(|d| match d.empty_column() {
+                Column::F64(_) => Column::F64(Vec::with_capacity(n)),
+                Column::U64(_) => Column::U64(Vec::with_capacity(n)),
+                Column::Str(_) => Column::Str(Vec::with_capacity(n)),
+            })
+            .collect()
     }
 
     /// Appends one row decoded from `data` (missing fields: their default).
@@ -269,6 +367,23 @@ impl<'a> Wire<'a> {
             self.pos
         ))
     }
+    /// Consumes the field key `key` if it comes next (true), else leaves the position (false).
+    #[inline]
+    pub(crate) fn expect_key(&mut self, key: u64) -> bool {
+        if key < 0x80 {
+            if self.data.get(self.pos) == Some(&(key as u8)) {
+                self.pos += 1;
+                return true;
+            }
+            return false;
+        }
+        let at = self.pos;
+        if self.varint() == Ok(key) {
+            return true;
+        }
+        self.pos = at;
+        false
+    }
     pub(crate) fn key(&mut self) -> Result<(u32, u32), String> {
         let key = self.varint()?;
         let number = key >> 3;
@@ -319,14 +434,26 @@ impl<'a> Wire<'a> {
 
 /// One decoded `foxglove.FrameTransform`.
 pub(crate) struct DecodedPose<'a> {
-    pub parent: &'a str,
-    pub child: &'a str,
+    /// Frame ids as bytes (the caller checks them as UTF-8).
+    pub parent: &'a [u8],
+    pub child: &'a [u8],
     pub translation: [f64; 3],
     pub rotation: [f64; 4],
 }
 
 fn decode_doubles<const N: usize>(data: &[u8], what: &str) -> Result<[f64; N], String> {
     let mut out = [0.0; N];
+    // Fast path: every field once, in order (as our writer and most encoders write them).
+    if data.len() == 9 * N
+        && (0..N).all(|i| data[9 * i] as usize == ((i + 1) << 3) | WIRE_FIXED64 as usize)
+    {
+        for (i, v) in out.iter_mut().enumerate() {
+            let mut a = [0u8; 8];
+            a.copy_from_slice(&data[9 * i + 1..9 * i + 9]);
+            *v = f64::from_le_bytes(a);
+        }
+        return Ok(out);
+    }
     let mut r = Wire::new(data);
     while !r.done() {
         let (number, wire) = r.key()?;
@@ -348,8 +475,8 @@ fn decode_doubles<const N: usize>(data: &[u8], what: &str) -> Result<[f64; N], S
 /// Decodes a FrameTransform; a missing rotation is the identity, missing numbers are zero.
 pub(crate) fn decode_pose(data: &[u8]) -> Result<DecodedPose<'_>, String> {
     let mut pose = DecodedPose {
-        parent: "",
-        child: "",
+        parent: b"",
+        child: b"",
         translation: [0.0; 3],
         rotation: [0.0, 0.0, 0.0, 1.0],
     };
@@ -363,8 +490,7 @@ pub(crate) fn decode_pose(data: &[u8]) -> Result<DecodedPose<'_>, String> {
         }
         match number {
             2 | 3 => {
-                let s = std::str::from_utf8(r.len_delimited()?)
-                    .map_err(|_| "frame ids as UTF-8 text".to_owned())?;
+                let s = r.len_delimited()?;
                 if number == 2 {
                     pose.parent = s;
                 } else {
@@ -377,4 +503,107 @@ pub(crate) fn decode_pose(data: &[u8]) -> Result<DecodedPose<'_>, String> {
         }
     }
     Ok(pose)
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::schema::{FieldSpec, RecordSchema, put_varint};
+
+    fn layout() -> RecordLayout {
+        let schema = RecordSchema {
+            full_name: "t.Row".into(),
+            fields: vec![
+                FieldSpec::f64("a", ""),
+                FieldSpec::u64("b"),
+                FieldSpec::str("c"),
+                FieldSpec::f64("d", ""),
+            ],
+        };
+        RecordLayout::from_descriptor_set(&schema.file_descriptor_set(), "t.Row").unwrap()
+    }
+
+    fn field(buf: &mut Vec<u8>, number: u64, v: &Column) {
+        match v {
+            Column::F64(x) => {
+                put_varint(buf, (number << 3) | 1);
+                buf.extend_from_slice(&x[0].to_le_bytes());
+            }
+            Column::U64(x) => {
+                put_varint(buf, number << 3);
+                put_varint(buf, x[0]);
+            }
+            Column::Str(x) => {
+                put_varint(buf, (number << 3) | 2);
+                put_varint(buf, x[0].len() as u64);
+                buf.extend_from_slice(x[0].as_bytes());
+            }
+        }
+    }
+
+    /// The canonical fast path and the field-by-field decoder agree on every ordering, on
+    /// missing, repeated and unknown fields, and a failed fast attempt leaves no partial row.
+    #[test]
+    fn decode_row_agrees_with_the_general_decoder() {
+        let l = layout();
+        let vals = [
+            Column::F64(vec![-0.0]),
+            Column::U64(vec![300]),
+            Column::Str(vec!["héllo".into()]),
+            Column::F64(vec![f64::from_bits(0x7ff8_0000_dead_beef)]),
+        ];
+        let enc = |order: &[usize]| {
+            let mut b = Vec::new();
+            for &i in order {
+                field(&mut b, i as u64 + 1, &vals[i]);
+            }
+            b
+        };
+        let mut unknown = enc(&[0, 1, 2, 3]);
+        unknown.extend_from_slice(&[0x48, 0x07]); // field 9, varint 7: not in the schema
+        let mut repeated = enc(&[0, 1, 2, 3]);
+        field(&mut repeated, 2, &Column::U64(vec![5]));
+        let cases: Vec<Vec<u8>> = vec![
+            enc(&[0, 1, 2, 3]),
+            enc(&[3, 2, 1, 0]),
+            enc(&[0, 2]),
+            enc(&[]),
+            unknown,
+            repeated,
+        ];
+        let mut fast = l.columns_with_capacity(0);
+        let mut slow = l.columns_with_capacity(0);
+        for c in &cases {
+            l.decode_row(c, &mut fast).unwrap();
+            l.decode_into(c, &mut slow).unwrap();
+        }
+        let bits = |cols: &[Column]| -> Vec<String> {
+            cols.iter()
+                .map(|c| match c {
+                    Column::F64(v) => {
+                        format!("{:?}", v.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+                    }
+                    other => format!("{other:?}"),
+                })
+                .collect()
+        };
+        assert_eq!(bits(&fast), bits(&slow));
+        assert_eq!(
+            fast[1].as_u64().unwrap()[5],
+            5,
+            "the last of repeated fields wins"
+        );
+        assert_eq!(
+            fast[3].as_f64().unwrap()[0].to_bits(),
+            0x7ff8_0000_dead_beef
+        );
+        // A truncated canonical row is an error and leaves every column the same length.
+        let full = enc(&[0, 1, 2, 3]);
+        let before = fast.iter().map(Column::len).collect::<Vec<_>>();
+        assert!(l.decode_row(&full[..full.len() - 3], &mut fast).is_err());
+        let n = fast[0].len();
+        assert!(fast.iter().all(|c| c.len() == n), "ragged columns");
+        assert!(n <= before[0] + 1);
+    }
 }

@@ -520,6 +520,12 @@ pub(crate) fn parse_footer(r: &RawRecord) -> Result<Footer, ParseError> {
     })
 }
 
+thread_local! {
+    /// One zstd decompression context per thread, reused across chunks (a context is ~100 KiB).
+    static DECOMPRESSOR: std::cell::RefCell<Option<zstd::bulk::Decompressor<'static>>> =
+        const { std::cell::RefCell::new(None) };
+}
+
 /// Decompresses a chunk's records. Allocation grows with the bytes actually produced and stops at
 /// the declared size (so a lying length field cannot make us reserve gigabytes), which is itself
 /// capped at [`MAX_CHUNK_UNCOMPRESSED`].
@@ -553,8 +559,17 @@ pub(crate) fn decompress_chunk(
                 // chunks by the callers). The bound keeps a lying size from reserving much more
                 // than the compressed bytes could plausibly produce.
                 out.reserve(declared as usize);
-                zstd::bulk::Decompressor::new()
-                    .and_then(|mut d| d.decompress_to_buffer(chunk.records, out))
+                DECOMPRESSOR
+                    .with(|cell| {
+                        let mut slot = cell.borrow_mut();
+                        if slot.is_none() {
+                            *slot = Some(zstd::bulk::Decompressor::new()?);
+                        }
+                        match slot.as_mut() {
+                            Some(d) => d.decompress_to_buffer(chunk.records, out),
+                            None => Ok(0),
+                        }
+                    })
                     .map_err(|e| {
                         ParseError::new(
                             chunk_offset,

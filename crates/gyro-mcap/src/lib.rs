@@ -22,16 +22,21 @@
 //! display as the Unix epoch (1970-01-01T00:00:00Z).
 //!
 //! # Life of a file
-//! [`RecordingWriter::create`] writes `NAME.mcap.partial`; every chunk is handed to the operating
-//! system when it is closed, and a chunk is closed at least every
-//! [`WriterOptions::flush_interval_s`] of wall time, so a killed process loses at most that much.
+//! [`RecordingWriter::create`] writes `NAME.mcap.partial`. The caller's thread only encodes
+//! messages into the open chunk; closed chunks are compressed by worker threads (one per core, up
+//! to four) and written in order by a writer thread, which hands each to the operating system
+//! as soon as it is written. A chunk is closed at least every [`WriterOptions::flush_interval_s`]
+//! of wall time, so a killed process loses at most that much plus the few chunks still queued
+//! (milliseconds of work); [`RecordingWriter::flush_chunk`] waits until they are written.
 //! [`RecordingWriter::finish`] (callable at any point, e.g. after Ctrl-C) writes the summary,
 //! syncs, and renames to `NAME.mcap`. [`recover`] turns a `.partial` file into a valid recording of
 //! everything up to its last whole chunk.
 //!
 //! # Reading untrusted files
 //! [`Recording::open`] reads through the summary and indexes when present, else scans the data
-//! section. Truncated, corrupted or foreign files give a [`RecordingError`] that names the file and
+//! section. [`Recording::read_topics`] and [`Recording::read_all`] decode several channels in one
+//! pass (each chunk decompressed once, chunks shared out among threads); `read_records` and
+//! `read_poses` decode one. Truncated, corrupted or foreign files give a [`RecordingError`] that names the file and
 //! the byte offset and record kind, never a panic; no allocation is sized by a length field
 //! beyond the bytes present (decompression grows with the bytes produced, capped at 256 MiB per
 //! chunk). The whole file is held in memory while open.
@@ -46,7 +51,9 @@ mod writer;
 
 pub use decode::Column;
 pub use error::RecordingError;
-pub use reader::{AttachmentInfo, ChannelInfo, ChannelKind, PoseTable, RecordTable, Recording};
+pub use reader::{
+    AttachmentInfo, ChannelInfo, ChannelKind, ChannelTable, PoseTable, RecordTable, Recording,
+};
 pub use recover::{RecoverReport, recover};
 pub use schema::{
     FRAME_TRANSFORM_FDS, FieldKind, FieldSpec, POSE_SCHEMA_NAME, Pose, RecordSchema, Value,

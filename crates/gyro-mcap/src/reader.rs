@@ -3,8 +3,9 @@
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
-use crate::decode::{Column, RecordLayout, decode_pose};
+use crate::decode::{Column, MAX_RESERVED_ROWS, RecordLayout, decode_pose};
 use crate::error::{ParseError, RecordingError, io_error};
 use crate::format::{
     ChannelRecord, Cursor, FOOTER_RECORD_LEN, MAGIC, RawRecord, SchemaRecord, decompress_chunk, op,
@@ -663,122 +664,211 @@ impl Recording {
         Ok((ch, schema))
     }
 
-    /// Calls `f(log_time, payload, chunk_offset)` for every message of channel `id`, in file order.
-    fn for_each_message(
+    /// Decodes the channels `wanted` (channel, decoder) in one pass over the file: each chunk
+    /// that holds any of them is decompressed once, and the chunks are shared out in contiguous
+    /// runs among up to one thread per core. Returns the decoders, filled, in `wanted` order.
+    fn decode_channels(
         &self,
-        id: u16,
-        mut f: impl FnMut(u64, &[u8], u64) -> Result<(), RecordingError>,
-    ) -> Result<(), RecordingError> {
-        let mut buf = Vec::new();
-        let id_bytes = id.to_le_bytes();
-        for block in &self.blocks {
-            if block.channels.binary_search(&id).is_err() {
-                continue;
+        wanted: Vec<(&ChannelRecord, Decoder)>,
+    ) -> Result<Vec<Decoder>, RecordingError> {
+        let ids: Vec<u16> = wanted.iter().map(|(ch, _)| ch.id).collect();
+        let topics: Vec<&str> = wanted.iter().map(|(ch, _)| ch.topic.as_str()).collect();
+        let max_id = ids.iter().copied().max().unwrap_or(0) as usize;
+        // Channel id → position in `wanted` (NONE: not decoded).
+        let mut slot_of = vec![NONE; max_id + 1];
+        for (i, &id) in ids.iter().enumerate() {
+            slot_of[id as usize] = i as u32;
+        }
+        let blocks: Vec<&Block> = self
+            .blocks
+            .iter()
+            .filter(|b| ids.iter().any(|id| b.channels.binary_search(id).is_ok()))
+            .collect();
+        let template: Vec<Decoder> = wanted.into_iter().map(|(_, d)| d).collect();
+        let threads = reading_threads(blocks.len());
+        let per = blocks.len().div_ceil(threads.max(1)).max(1);
+        let total_blocks = blocks.len().max(1);
+        let run = |part: &[&Block]| -> Result<Vec<Decoder>, RecordingError> {
+            // Sized for this share of the rows (chunks hold about equal numbers of messages).
+            let mut decoders: Vec<Decoder> = template
+                .iter()
+                .map(|d| d.empty_like(d.capacity() * part.len() / total_blocks + 1024))
+                .collect();
+            let mut buf = Vec::new();
+            for block in part {
+                self.decode_block(block, &slot_of, &topics, &mut decoders, &mut buf)?;
             }
-            let (records, base) = match block.place {
-                Place::Chunk { offset } => {
-                    let r = record_at(&self.data, offset, self.data.len() as u64, "chunk")
-                        .map_err(|e| e.in_file(&self.path))?;
-                    let chunk = parse_chunk(&r).map_err(|e| e.in_file(&self.path))?;
-                    decompress_chunk(&chunk, offset, &mut buf)
-                        .map_err(|e| e.in_file(&self.path))?;
-                    (buf.as_slice(), offset)
-                }
-                Place::Loose { start, end } => (&self.data[start as usize..end as usize], start),
-            };
-            let mut c = Cursor::new(records, 0, "chunk records");
-            let place = |e: ParseError| match block.place {
-                Place::Chunk { offset } => chunk_inner_error(e, offset).in_file(&self.path),
-                Place::Loose { start, .. } => {
-                    ParseError::new(start + e.offset, "message", e.expected).in_file(&self.path)
-                }
-            };
-            while !c.is_empty() {
-                let r = c.record().map_err(place)?;
-                if r.opcode == op::MESSAGE && r.body.get(..2) == Some(&id_bytes[..]) {
-                    let m = parse_message(&r).map_err(place)?;
-                    f(m.log_time, m.data, base)?;
-                }
+            Ok(decoders)
+        };
+        let parts: Vec<Result<Vec<Decoder>, RecordingError>> = if threads <= 1 {
+            vec![run(&blocks)]
+        } else {
+            std::thread::scope(|s| {
+                let handles: Vec<_> = blocks
+                    .chunks(per)
+                    .map(|part| s.spawn(move || run(part)))
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+                    .collect()
+            })
+        };
+        // The first error in file order wins; the parts are contiguous runs in file order.
+        let mut parts = parts.into_iter();
+        let mut out = match parts.next() {
+            Some(first) => first?,
+            None => template,
+        };
+        for part in parts {
+            for (whole, piece) in out.iter_mut().zip(part?) {
+                whole.append(piece);
             }
         }
+        for d in &mut out {
+            d.sort_by_time();
+        }
+        Ok(out)
+    }
+
+    /// Decodes the messages of one block into the decoders of their channels.
+    fn decode_block(
+        &self,
+        block: &Block,
+        slot_of: &[u32],
+        topics: &[&str],
+        decoders: &mut [Decoder],
+        buf: &mut Vec<u8>,
+    ) -> Result<(), RecordingError> {
+        let (records, base) = match block.place {
+            Place::Chunk { offset } => {
+                let r = record_at(&self.data, offset, self.data.len() as u64, "chunk")
+                    .map_err(|e| e.in_file(&self.path))?;
+                let chunk = parse_chunk(&r).map_err(|e| e.in_file(&self.path))?;
+                decompress_chunk(&chunk, offset, buf).map_err(|e| e.in_file(&self.path))?;
+                (buf.as_slice(), offset)
+            }
+            Place::Loose { start, end } => (&self.data[start as usize..end as usize], start),
+        };
+        let mut c = Cursor::new(records, 0, "chunk records");
+        let place = |e: ParseError| match block.place {
+            Place::Chunk { offset } => chunk_inner_error(e, offset).in_file(&self.path),
+            Place::Loose { start, .. } => {
+                ParseError::new(start + e.offset, "message", e.expected).in_file(&self.path)
+            }
+        };
+        while !c.is_empty() {
+            let r = c.record().map_err(place)?;
+            if r.opcode != op::MESSAGE || r.body.len() < 2 {
+                continue;
+            }
+            let id = u16::from_le_bytes([r.body[0], r.body[1]]) as usize;
+            let Some(&slot) = slot_of.get(id) else {
+                continue;
+            };
+            if slot == NONE {
+                continue;
+            }
+            let m = parse_message(&r).map_err(place)?;
+            decoders[slot as usize]
+                .push(m.log_time, m.data)
+                .map_err(|e| self.message_error(topics[slot as usize], base, m.log_time, e))?;
+        }
         Ok(())
+    }
+
+    /// The decoder of one channel: records through the schema's layout, or poses.
+    fn decoder_for(&self, topic: &str) -> Result<(&ChannelRecord, Decoder), RecordingError> {
+        let (ch, schema) = self.channel_by_topic(topic)?;
+        let n = (self.stats.get(&ch.id).map_or(0, |s| s.count) as usize).min(MAX_RESERVED_ROWS);
+        let decoder = if schema.name == POSE_SCHEMA_NAME {
+            Decoder::Poses(PoseDecoder::with_capacity(n))
+        } else {
+            let layout = RecordLayout::from_descriptor_set(&schema.data, &schema.name)
+                .map_err(|e| self.schema_error(topic, e))?;
+            let columns = layout.columns_with_capacity(n);
+            Decoder::Records {
+                layout: Arc::new(layout),
+                log_time_ns: Vec::with_capacity(n),
+                columns,
+            }
+        };
+        Ok((ch, decoder))
+    }
+
+    /// Several channels at once, in the order asked: every chunk is decompressed once for all
+    /// of them (reading channels one by one decompresses each chunk once per channel). Record
+    /// channels come back as [`ChannelTable::Records`], `foxglove.FrameTransform` channels as
+    /// [`ChannelTable::Poses`]; rows sorted by log time.
+    pub fn read_topics(&self, topics: &[&str]) -> Result<Vec<ChannelTable>, RecordingError> {
+        let wanted = topics
+            .iter()
+            .map(|t| self.decoder_for(t))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut seen = std::collections::HashSet::new();
+        if let Some(dup) = topics.iter().find(|t| !seen.insert(**t)) {
+            return Err(self.schema_error(dup, "each topic asked for once"));
+        }
+        Ok(self
+            .decode_channels(wanted)?
+            .into_iter()
+            .map(Decoder::into_table)
+            .collect())
+    }
+
+    /// Every channel this crate decodes (records and poses), by topic, in one pass.
+    pub fn read_all(&self) -> Result<BTreeMap<String, ChannelTable>, RecordingError> {
+        let topics: Vec<String> = self
+            .channels()
+            .into_iter()
+            .filter(|c| c.kind != ChannelKind::Other)
+            .map(|c| c.topic)
+            .collect();
+        let refs: Vec<&str> = topics.iter().map(String::as_str).collect();
+        let tables = self.read_topics(&refs)?;
+        Ok(topics.into_iter().zip(tables).collect())
     }
 
     /// The records of a protobuf channel as columns, decoded through the schema's
     /// FileDescriptorSet stored in the file (so files written by any version of a schema read
     /// back; fields missing in a message take their default). Rows are sorted by log time.
     pub fn read_records(&self, topic: &str) -> Result<RecordTable, RecordingError> {
-        let (ch, schema) = self.channel_by_topic(topic)?;
-        if schema.name == POSE_SCHEMA_NAME {
+        let (ch, decoder) = self.decoder_for(topic)?;
+        if matches!(decoder, Decoder::Poses(_)) {
             return Err(self.schema_error(
                 topic,
                 "a record channel, found a pose channel (use read_poses)",
             ));
         }
-        let layout = RecordLayout::from_descriptor_set(&schema.data, &schema.name)
-            .map_err(|e| self.schema_error(topic, e))?;
-        let mut columns = layout.empty_columns();
-        let mut log_time_ns =
-            Vec::with_capacity(self.stats.get(&ch.id).map_or(0, |s| s.count) as usize);
-        self.for_each_message(ch.id, |t, payload, chunk_offset| {
-            layout
-                .decode_into(payload, &mut columns)
-                .map_err(|expected| self.message_error(topic, chunk_offset, t, expected))?;
-            log_time_ns.push(t);
-            Ok(())
-        })?;
-        if let Some(order) = sort_order(&log_time_ns) {
-            log_time_ns = order.iter().map(|&i| log_time_ns[i]).collect();
-            for c in &mut columns {
-                c.permute(&order);
-            }
+        match self
+            .decode_channels(vec![(ch, decoder)])?
+            .pop()
+            .map(Decoder::into_table)
+        {
+            Some(ChannelTable::Records(t)) => Ok(t),
+            _ => Err(self.schema_error(topic, "a record channel")),
         }
-        Ok(RecordTable {
-            log_time_ns,
-            columns: layout.names.into_iter().zip(columns).collect(),
-        })
     }
 
     /// The poses of a `foxglove.FrameTransform` channel as columns, sorted by log time.
     pub fn read_poses(&self, topic: &str) -> Result<PoseTable, RecordingError> {
-        let (ch, schema) = self.channel_by_topic(topic)?;
-        if schema.name != POSE_SCHEMA_NAME {
+        let (ch, decoder) = self.decoder_for(topic)?;
+        if !matches!(decoder, Decoder::Poses(_)) {
+            let (_, schema) = self.channel_by_topic(topic)?;
             return Err(self.schema_error(
                 topic,
                 format!("schema {POSE_SCHEMA_NAME}, found {:?}", schema.name),
             ));
         }
-        let n = self.stats.get(&ch.id).map_or(0, |s| s.count) as usize;
-        let mut t = PoseTable {
-            log_time_ns: Vec::with_capacity(n),
-            parent_frame: Vec::with_capacity(n),
-            child_frame: Vec::with_capacity(n),
-            translation_m: Vec::with_capacity(n),
-            rotation_xyzw: Vec::with_capacity(n),
-        };
-        self.for_each_message(ch.id, |time, payload, chunk_offset| {
-            let p = decode_pose(payload)
-                .map_err(|e| self.message_error(topic, chunk_offset, time, e))?;
-            t.log_time_ns.push(time);
-            t.parent_frame.push(p.parent.to_owned());
-            t.child_frame.push(p.child.to_owned());
-            t.translation_m.push(p.translation);
-            t.rotation_xyzw.push(p.rotation);
-            Ok(())
-        })?;
-        if let Some(order) = sort_order(&t.log_time_ns) {
-            fn apply<T: Clone>(v: &mut Vec<T>, order: &[usize]) {
-                *v = order.iter().map(|&i| v[i].clone()).collect();
-            }
-            apply(&mut t.log_time_ns, &order);
-            apply(&mut t.parent_frame, &order);
-            apply(&mut t.child_frame, &order);
-            apply(&mut t.translation_m, &order);
-            apply(&mut t.rotation_xyzw, &order);
+        match self
+            .decode_channels(vec![(ch, decoder)])?
+            .pop()
+            .map(Decoder::into_table)
+        {
+            Some(ChannelTable::Poses(t)) => Ok(t),
+            _ => Err(self.schema_error(topic, "a pose channel")),
         }
-        Ok(t)
     }
-
     fn schema_error(&self, topic: &str, expected: impl Into<String>) -> RecordingError {
         RecordingError::Schema {
             path: self.path.clone(),
@@ -812,4 +902,231 @@ fn sort_order(times: &[u64]) -> Option<Vec<usize>> {
     let mut order: Vec<usize> = (0..times.len()).collect();
     order.sort_by_key(|&i| times[i]);
     Some(order)
+}
+
+/// One decoded channel, as [`Recording::read_topics`] returns it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ChannelTable {
+    Records(RecordTable),
+    Poses(PoseTable),
+}
+
+impl ChannelTable {
+    pub fn len(&self) -> usize {
+        match self {
+            ChannelTable::Records(t) => t.len(),
+            ChannelTable::Poses(t) => t.len(),
+        }
+    }
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    pub fn log_time_ns(&self) -> &[u64] {
+        match self {
+            ChannelTable::Records(t) => &t.log_time_ns,
+            ChannelTable::Poses(t) => &t.log_time_ns,
+        }
+    }
+    pub fn as_records(&self) -> Option<&RecordTable> {
+        match self {
+            ChannelTable::Records(t) => Some(t),
+            ChannelTable::Poses(_) => None,
+        }
+    }
+    pub fn as_poses(&self) -> Option<&PoseTable> {
+        match self {
+            ChannelTable::Poses(t) => Some(t),
+            ChannelTable::Records(_) => None,
+        }
+    }
+}
+
+/// "No decoder" in the channel id → decoder table.
+const NONE: u32 = u32::MAX;
+
+/// Threads that share out `blocks` chunks: one per core, at most 4, and only when each gets a
+/// few chunks (a thread costs about as much as decompressing a small chunk).
+fn reading_threads(blocks: usize) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get().clamp(1, 4));
+    cores.min(blocks / 4).max(1)
+}
+
+/// A channel being decoded.
+enum Decoder {
+    Records {
+        layout: Arc<RecordLayout>,
+        log_time_ns: Vec<u64>,
+        columns: Vec<Column>,
+    },
+    Poses(PoseDecoder),
+}
+
+impl Decoder {
+    /// An empty decoder of the same channel with room for `n` rows (for a thread's share).
+    fn empty_like(&self, n: usize) -> Self {
+        match self {
+            Decoder::Records { layout, .. } => Decoder::Records {
+                layout: Arc::clone(layout),
+                log_time_ns: Vec::with_capacity(n),
+                columns: layout.columns_with_capacity(n),
+            },
+            Decoder::Poses(_) => Decoder::Poses(PoseDecoder::with_capacity(n)),
+        }
+    }
+
+    /// Rows this decoder was sized for (the channel's message count).
+    fn capacity(&self) -> usize {
+        match self {
+            Decoder::Records { log_time_ns, .. } => log_time_ns.capacity(),
+            Decoder::Poses(p) => p.table.log_time_ns.capacity(),
+        }
+    }
+
+    #[inline]
+    fn push(&mut self, log_time: u64, payload: &[u8]) -> Result<(), String> {
+        match self {
+            Decoder::Records {
+                layout,
+                log_time_ns,
+                columns,
+            } => {
+                layout.decode_row(payload, columns)?;
+                log_time_ns.push(log_time);
+                Ok(())
+            }
+            Decoder::Poses(p) => p.push(log_time, payload),
+        }
+    }
+
+    /// Appends the rows of `other` (a later share of the same channel).
+    fn append(&mut self, other: Decoder) {
+        match (self, other) {
+            (
+                Decoder::Records {
+                    log_time_ns,
+                    columns,
+                    ..
+                },
+                Decoder::Records {
+                    log_time_ns: mut t,
+                    columns: cols,
+                    ..
+                },
+            ) => {
+                log_time_ns.append(&mut t);
+                for (c, o) in columns.iter_mut().zip(cols) {
+                    c.append(o);
+                }
+            }
+            (Decoder::Poses(a), Decoder::Poses(b)) => a.append(b),
+            _ => {}
+        }
+    }
+
+    fn sort_by_time(&mut self) {
+        match self {
+            Decoder::Records {
+                log_time_ns,
+                columns,
+                ..
+            } => {
+                if let Some(order) = sort_order(log_time_ns) {
+                    *log_time_ns = order.iter().map(|&i| log_time_ns[i]).collect();
+                    for c in columns {
+                        c.permute(&order);
+                    }
+                }
+            }
+            Decoder::Poses(p) => p.sort_by_time(),
+        }
+    }
+
+    fn into_table(self) -> ChannelTable {
+        match self {
+            Decoder::Records {
+                layout,
+                log_time_ns,
+                columns,
+            } => ChannelTable::Records(RecordTable {
+                log_time_ns,
+                columns: layout.names.iter().cloned().zip(columns).collect(),
+            }),
+            Decoder::Poses(p) => ChannelTable::Poses(p.table),
+        }
+    }
+}
+
+/// Decodes poses; frame ids repeat, so each distinct one is checked as UTF-8 once.
+struct PoseDecoder {
+    table: PoseTable,
+    /// Frame ids seen so far (a design has a handful of bodies).
+    frames: Vec<(Vec<u8>, String)>,
+}
+
+/// Distinct frame ids remembered; a channel with more is decoded without the cache.
+const FRAME_CACHE: usize = 64;
+
+impl PoseDecoder {
+    fn with_capacity(n: usize) -> Self {
+        Self {
+            table: PoseTable {
+                log_time_ns: Vec::with_capacity(n),
+                parent_frame: Vec::with_capacity(n),
+                child_frame: Vec::with_capacity(n),
+                translation_m: Vec::with_capacity(n),
+                rotation_xyzw: Vec::with_capacity(n),
+            },
+            frames: Vec::new(),
+        }
+    }
+
+    fn frame(&mut self, bytes: &[u8]) -> Result<String, String> {
+        if let Some((_, s)) = self.frames.iter().find(|(b, _)| b == bytes) {
+            return Ok(s.clone());
+        }
+        let s = std::str::from_utf8(bytes)
+            .map_err(|_| "frame ids as UTF-8 text".to_owned())?
+            .to_owned();
+        if self.frames.len() < FRAME_CACHE {
+            self.frames.push((bytes.to_vec(), s.clone()));
+        }
+        Ok(s)
+    }
+
+    #[inline]
+    fn push(&mut self, log_time: u64, payload: &[u8]) -> Result<(), String> {
+        let p = decode_pose(payload)?;
+        let parent = self.frame(p.parent)?;
+        let child = self.frame(p.child)?;
+        let t = &mut self.table;
+        t.log_time_ns.push(log_time);
+        t.parent_frame.push(parent);
+        t.child_frame.push(child);
+        t.translation_m.push(p.translation);
+        t.rotation_xyzw.push(p.rotation);
+        Ok(())
+    }
+
+    fn append(&mut self, mut other: PoseDecoder) {
+        let (a, b) = (&mut self.table, &mut other.table);
+        a.log_time_ns.append(&mut b.log_time_ns);
+        a.parent_frame.append(&mut b.parent_frame);
+        a.child_frame.append(&mut b.child_frame);
+        a.translation_m.append(&mut b.translation_m);
+        a.rotation_xyzw.append(&mut b.rotation_xyzw);
+    }
+
+    fn sort_by_time(&mut self) {
+        let t = &mut self.table;
+        if let Some(order) = sort_order(&t.log_time_ns) {
+            fn apply<T: Clone>(v: &mut Vec<T>, order: &[usize]) {
+                *v = order.iter().map(|&i| v[i].clone()).collect();
+            }
+            apply(&mut t.log_time_ns, &order);
+            apply(&mut t.parent_frame, &order);
+            apply(&mut t.child_frame, &order);
+            apply(&mut t.translation_m, &order);
+            apply(&mut t.rotation_xyzw, &order);
+        }
+    }
 }
