@@ -1,9 +1,14 @@
 """Decodes every channel of a gyrolab recording with the reference Python MCAP libraries
-(mcap + mcap-protobuf-support) and prints `key=value` lines for the Rust test to check.
+(mcap + mcap-protobuf-support) and prints what it found for the Rust tests to check.
 
-Usage: python decode_recording.py RECORDING.mcap
+Usage:
+  python decode_recording.py RECORDING.mcap          `key=value` lines (the synthetic sample's test)
+  python decode_recording.py RECORDING.mcap --json   one JSON object, for any recording: per topic
+      the schema, the message count, and every field of the messages whose index is listed in
+      --rows (default 0,1 and the last), floats as the bits of their IEEE double (exact)
 """
 
+import json
 import struct
 import sys
 
@@ -56,5 +61,61 @@ def main(path):
             print(f"attachment.{a.name}={len(a.data)}")
 
 
+def flatten(msg, prefix=""):
+    """Every field of a decoded protobuf message (zeros too: proto3 does not keep presence), nested
+    messages as dotted names; doubles as {"bits": u64} so the comparison is exact."""
+    out = {}
+    for field in msg.DESCRIPTOR.fields:
+        value = getattr(msg, field.name)
+        name = prefix + field.name
+        if field.type == field.TYPE_MESSAGE:
+            out.update(flatten(value, name + "."))
+        elif field.type in (field.TYPE_DOUBLE, field.TYPE_FLOAT):
+            out[name] = {"bits": bits(value)}
+        else:
+            out[name] = value
+    return out
+
+
+def main_json(path, rows):
+    with open(path, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        summary = reader.get_summary()
+        topics = {}
+        decoded_rows = {}
+        for schema, channel, message, decoded in reader.iter_decoded_messages(log_time_order=False):
+            t = topics.setdefault(
+                channel.topic,
+                {"schema": schema.name, "encoding": channel.message_encoding, "count": 0},
+            )
+            i = t["count"]
+            t["count"] = i + 1
+            # Keep the first rows asked for and always the latest (the last row is known at the end).
+            if i in rows:
+                decoded_rows[(channel.topic, i)] = (message.log_time, flatten(decoded))
+            t["_last"] = (message.log_time, decoded)
+        for topic, t in topics.items():
+            log_time, last = t.pop("_last")
+            t["rows"] = {
+                str(i): {"log_time": lt, "fields": fields}
+                for (tp, i), (lt, fields) in decoded_rows.items()
+                if tp == topic
+            }
+            t["rows"]["last"] = {"log_time": log_time, "fields": flatten(last)}
+        out = {
+            "message_count": summary.statistics.message_count,
+            "topics": topics,
+            "metadata": {m.name: dict(m.metadata) for m in reader.iter_metadata()},
+            "attachments": {a.name: len(a.data) for a in reader.iter_attachments()},
+        }
+        json.dump(out, sys.stdout, sort_keys=True)
+
+
 if __name__ == "__main__":
-    main(sys.argv[1])
+    if "--json" in sys.argv[2:]:
+        rows = {0, 1}
+        if "--rows" in sys.argv:
+            rows = {int(x) for x in sys.argv[sys.argv.index("--rows") + 1].split(",")}
+        main_json(sys.argv[1], rows)
+    else:
+        main(sys.argv[1])
