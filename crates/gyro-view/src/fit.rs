@@ -1,6 +1,6 @@
 //! Where the fitted settling curve comes from. The viewer only draws it; fitting belongs to
-//! `gyro-analysis`. [`SettlingFit`] is the seam: [`default_fit`] returns the analysis crate's fit
-//! once its API exists, and tests pass their own.
+//! `gyro-analysis`. [`SettlingFit`] is the seam: [`default_fit`] is [`AnalysisFit`] (the analysis
+//! crate's `fit_damped_sinusoid`), and tests pass their own.
 
 /// `offset + drift·(t − t0) + amplitude · exp(−decay·(t − t0)) · cos(2π(t − t0)/period + phase)`
 /// over `[start_s, end_s]`,
@@ -86,8 +86,69 @@ where
     }
 }
 
-/// The fit [`crate::view`] draws: `gyro-analysis`'s damped-sinusoid fit once that crate exposes
-/// one; until then none.
+/// `gyro_analysis::fit_damped_sinusoid` with its default options; drawn only when the fit stands
+/// (quality `ok`), over the window it fitted.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AnalysisFit;
+
+impl SettlingFit for AnalysisFit {
+    fn fit(&self, time_s: &[f64], value: &[f64]) -> Option<DampedSinusoid> {
+        let f = gyro_analysis::fit_damped_sinusoid(
+            time_s,
+            value,
+            &gyro_analysis::FitOptions::default(),
+        );
+        if !f.quality.is_ok() {
+            return None;
+        }
+        let m = f.model?;
+        Some(DampedSinusoid {
+            offset: m.offset,
+            drift_per_s: m.drift_per_s,
+            amplitude: m.amplitude,
+            decay_rate_per_s: m.decay_rate_per_s,
+            period_s: m.period_s,
+            phase_rad: m.phase_rad,
+            t0_s: m.t0_s,
+            start_s: f.window_s.0,
+            end_s: f.window_s.1,
+        })
+    }
+}
+
+/// The fit [`crate::view`] draws: [`AnalysisFit`].
 pub fn default_fit() -> &'static dyn SettlingFit {
-    &NoFit
+    &AnalysisFit
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn analysis_fit_recovers_a_damped_sinusoid() {
+        let truth = DampedSinusoid {
+            offset: 0.001,
+            drift_per_s: 0.0,
+            amplitude: 0.02,
+            decay_rate_per_s: 1.0 / 4000.0,
+            period_s: 600.0,
+            phase_rad: 0.3,
+            t0_s: 0.0,
+            start_s: 0.0,
+            end_s: 6000.0,
+        };
+        let t: Vec<f64> = (0..6000).map(f64::from).collect();
+        let y: Vec<f64> = t.iter().map(|&t| truth.value(t)).collect();
+        let f = AnalysisFit.fit(&t, &y).expect("the fit stands");
+        assert!((f.period_s - 600.0).abs() < 0.1, "{f:?}");
+        assert!(
+            (f.decay_rate_per_s - truth.decay_rate_per_s).abs() < 1e-6,
+            "{f:?}"
+        );
+        for &s in &[100.0, 2500.0, 5900.0] {
+            assert!((f.value(s) - truth.value(s)).abs() < 1e-5, "{s}: {f:?}");
+        }
+        assert!(AnalysisFit.fit(&t[..5], &y[..5]).is_none());
+    }
 }

@@ -42,7 +42,7 @@ use rerun::blueprint::{
 };
 use rerun::{RecordingStream, RecordingStreamBuilder, TimeColumn, Timeline};
 
-pub use fit::{DampedSinusoid, NoFit, SettlingFit, default_fit};
+pub use fit::{AnalysisFit, DampedSinusoid, NoFit, SettlingFit, default_fit};
 pub use math::TILT_SATURATION_RAD;
 
 /// Where the logged data goes.
