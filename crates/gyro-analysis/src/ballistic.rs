@@ -18,13 +18,9 @@ use crate::fit::{Estimate, FitOptions, Quality, fit_damped_sinusoid};
 use crate::load::{EVENTS_TOPIC, Run};
 use crate::steady::{SteadyOptions, steady_error};
 
-/// Earth's rotation rate, rad/s (sidereal).
-pub const EARTH_RATE_RAD_PER_S: f64 = 7.292_115e-5;
-/// Mean Earth radius, m.
-pub const EARTH_RADIUS_M: f64 = 6_371_000.0;
-/// Schuler's period 2π√(R/g) for R = 6371 km, g = 9.80665 m/s² (used when the recording does not
-/// give `schuler_period_s`).
-pub const SCHULER_PERIOD_S: f64 = 5_064.3;
+// Physical constants and the elementary speed error live in one place, gyro-model.
+pub use gyro_model::constants::{EARTH_RADIUS_M, EARTH_RATE_RAD_PER_S, schuler_period_s};
+pub use gyro_model::theory::speed_error_rad;
 
 /// One record of `/events`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -92,14 +88,6 @@ pub fn events_of(run: &Run) -> Result<Vec<ManoeuvreEvent>> {
         .collect())
 }
 
-/// The elementary speed error (rad, positive West of North = reads high) at speed `v` on
-/// navigational heading `heading_rad` (clockwise from North) at latitude `latitude_rad`.
-pub fn speed_error_rad(speed_m_per_s: f64, heading_rad: f64, latitude_rad: f64) -> f64 {
-    let v_north = speed_m_per_s * heading_rad.cos();
-    let v_east = speed_m_per_s * heading_rad.sin();
-    v_north.atan2(EARTH_RATE_RAD_PER_S * EARTH_RADIUS_M * latitude_rad.cos() + v_east)
-}
-
 /// Settings of [`ballistic_deviations`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BallisticOptions {
@@ -125,7 +113,7 @@ impl Default for BallisticOptions {
 pub struct BallisticConstants {
     /// The compass's undamped period T (metadata `undamped_period_s`, else a fitted period).
     pub undamped_period_s: Option<f64>,
-    /// Schuler's period T_S (metadata `schuler_period_s`, else [`SCHULER_PERIOD_S`]).
+    /// Schuler's period T_S (metadata `schuler_period_s`, else [`schuler_period_s`]).
     pub schuler_period_s: f64,
     /// Latitude where the recording does not give the ship's (metadata `latitude_deg`).
     pub latitude_rad: Option<f64>,

@@ -14,8 +14,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::ballistic::{
-    BallisticConstants, BallisticDeviation, BallisticOptions, SCHULER_PERIOD_S,
-    ballistic_deviations, events_of,
+    BallisticConstants, BallisticDeviation, BallisticOptions, ballistic_deviations, events_of,
+    schuler_period_s,
 };
 use crate::error::{AnalysisError, Result};
 use crate::fit::{FitOptions, OscillationFit, Quality, decimate, fit_damped_sinusoid};
@@ -577,7 +577,7 @@ pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> 
         undamped_period_s: design_period,
         schuler_period_s: run
             .meta_f64("design_constants", "schuler_period_s")
-            .unwrap_or(SCHULER_PERIOD_S),
+            .unwrap_or_else(schuler_period_s),
         latitude_rad: run.meta_f64("run", "latitude_deg").map(f64::to_radians),
     };
     let ballistic = ballistic_deviations(
