@@ -843,7 +843,7 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
             ForceFile::BodyForce { name, body, direction, force_n, point_m } => {
                 let bi = body_names.iter().position(|n| n == body).ok_or_else(|| bad(name, "body", format!("unknown body `{body}` (allowed: {})", body_names.join(", "))))?;
                 let n = (direction[0].powi(2) + direction[1].powi(2) + direction[2].powi(2)).sqrt();
-                if !(n > 0.0 && n.is_finite()) || !force_n.is_finite() {
+                if !(n > 0.0 && n.is_finite() && force_n.is_finite()) {
                     return Err(bad(name, "direction", "direction must be a non-zero finite vector and force_n finite".into()));
                 }
                 let p = [parse_e(&point_m[0], name, "point_m")?, parse_e(&point_m[1], name, "point_m")?, parse_e(&point_m[2], name, "point_m")?];

@@ -2,8 +2,8 @@
 //!
 //! World frame: the local level frame at the compass pivot, X North, Y West, Z up (Beghin's).
 //! It moves with the ship over a spherical Earth and turns with it; its absolute angular
-//! velocity is the Earth rate plus the transport rate, ε(cos L, 0, sin L) + λ̇(cos L, 0, sin L)
-//! + (0, L̇, 0) with longitude rate λ̇ = v_E/(R cos L) and L̇ = v_N/R. So the gyrocompass effect,
+//! velocity is the Earth rate plus the transport rate, ε(cos L, 0, sin L) + λ̇(cos L, 0, sin L) +
+//! (0, L̇, 0) with longitude rate λ̇ = v_E/(R cos L) and L̇ = v_N/R. So the gyrocompass effect,
 //! the speed error and the Coriolis terms come out of kinematics, not special formulas.
 //!
 //! The ship frame: x forward (bow), y port, z up; world_from_ship = R_z(−heading) R_x(roll)

@@ -11,12 +11,18 @@
 //! [`CompiledModel::jacobian`], and a ship-motion program enters through the [`ShipMotion`] trait.
 //! Everything is SI; angles in radians; the world frame is North–West–Up (Beghin's).
 
+// Numerical kernels index several parallel arrays with one loop variable (rows, columns, dual
+// directions); iterator chains would hide the formulas. NaN-rejecting checks are written
+// `!(x > 0.0)` on purpose.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod constants;
 pub mod design;
 pub mod earth;
 pub mod engine;
 pub mod error;
 pub mod expr;
+pub mod kinetics;
 pub mod linalg;
 pub mod model;
 pub mod real;

@@ -53,6 +53,62 @@ pub fn solve_in_place<T: Real>(a: &mut [T], b: &mut [T], n: usize) -> bool {
     true
 }
 
+/// [`solve_in_place`] on the leading n×n block of a fixed-size matrix (what the model's
+/// stack-allocated equations use): the same elimination, pivots and operations.
+pub fn solve_nested<T: Real, const N: usize>(
+    a: &mut [[T; N]; N],
+    b: &mut [T; N],
+    n: usize,
+) -> bool {
+    let scale = a[..n]
+        .iter()
+        .flat_map(|row| row[..n].iter())
+        .map(|x| x.re().abs())
+        .fold(0.0, f64::max);
+    if !(scale > 0.0) || !scale.is_finite() {
+        return false;
+    }
+    for col in 0..n {
+        let mut piv = col;
+        let mut best = a[col][col].re().abs();
+        for r in col + 1..n {
+            let v = a[r][col].re().abs();
+            if v > best {
+                best = v;
+                piv = r;
+            }
+        }
+        if best <= scale * 1e-300 || best == 0.0 {
+            return false;
+        }
+        if piv != col {
+            a.swap(col, piv);
+            b.swap(col, piv);
+        }
+        let inv = T::one() / a[col][col];
+        for r in col + 1..n {
+            let f = a[r][col] * inv;
+            if f.re() == 0.0 && f == T::zero() {
+                continue;
+            }
+            for k in col..n {
+                let t = a[col][k];
+                a[r][k] -= f * t;
+            }
+            let t = b[col];
+            b[r] -= f * t;
+        }
+    }
+    for r in (0..n).rev() {
+        let mut s = b[r];
+        for k in r + 1..n {
+            s -= a[r][k] * b[k];
+        }
+        b[r] = s / a[r][r];
+    }
+    true
+}
+
 /// exp(A·h) for a small dense matrix (row-major), by scaling and squaring of a degree-18 Taylor
 /// series: accurate to round-off for the well-scaled matrices of linearised compasses.
 pub fn expm(a: &[f64], n: usize, h: f64) -> Vec<f64> {
@@ -263,7 +319,7 @@ fn hqr(a: &mut [f64], n: usize) -> Vec<(f64, f64)> {
                 }
             }
             let mut k = mu;
-            while k + 1 <= nu {
+            while k < nu {
                 if k != mu {
                     p = a[idx(k, k - 1)];
                     q = a[idx(k + 1, k - 1)];

@@ -13,10 +13,29 @@
 use crate::design::{CoordinateRole, Design, Force, Root, SpinMode};
 use crate::earth::{BaseEffects, ShipMotion, apparent_gravity, base_motion};
 use crate::engine::{Chain, EvalInput, EvalOutput, MAX_COORDINATES, body_poses, evaluate_any};
+use crate::kinetics::{self, Kinetics};
 use crate::linalg::{self, solve_in_place};
 use crate::real::{Jet, M3, Real, V3};
 use std::fmt;
 use std::str::FromStr;
+
+/// Calls `$m!(N, D)` with the dual-number width N ≥ the chain's coordinate count and the number
+/// D of state directions a Jacobian pass carries, from a few buckets: one instantiation per
+/// size would make the generic engine slow to compile; the waste is at most a third of the
+/// derivative work.
+macro_rules! by_width {
+    ($n:expr, $m:ident) => {
+        match $n {
+            0..=2 => $m!(2, 4),
+            3 => $m!(3, 6),
+            4 => $m!(4, 8),
+            5..=6 => $m!(6, 8),
+            7..=8 => $m!(8, 8),
+            9..=11 => $m!(11, 8),
+            _ => $m!(15, 8),
+        }
+    };
+}
 
 /// Model fidelity (design.md §6).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -227,7 +246,14 @@ pub struct CompiledModel<M: ShipMotion> {
     servo_s0: Vec<f64>,
     /// Per independent coordinate: precessional (first-order in `gyroscopic` fidelity).
     pub precessional: Vec<bool>,
+    /// Independent indices of the precessional coordinates, and of the others.
+    precessional_rows: Vec<usize>,
+    inertial_rows: Vec<usize>,
     drop_full: Vec<bool>,
+    /// The chain compiled for evaluation in body axes (what `rhs` and `jacobian` use).
+    kinetics: Kinetics,
+    /// No servo relation: the reduced equations are the chain's own.
+    no_servo: bool,
     pub spin_momentum: Vec<f64>,
     stationary: Option<StationaryBase>,
     /// `linear` fidelity: A (dim×dim) about x_eq.
@@ -246,6 +272,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
         let effects = opts.effects;
         let chain = Chain::from_design(&design, |f| effects.include_force(f));
+        let kinetics = Kinetics::from_design(&design, |f| effects.include_force(f));
         let independent: Vec<usize> = (0..n)
             .filter(|&i| design.coordinates[i].servo.is_none())
             .collect();
@@ -299,7 +326,11 @@ impl<M: ShipMotion> CompiledModel<M> {
             servo_s,
             servo_s0,
             precessional: vec![false; ni],
+            precessional_rows: Vec::new(),
+            inertial_rows: (0..ni).collect(),
             drop_full: Vec::new(),
+            kinetics,
+            no_servo: ni == n,
             spin_momentum,
             stationary,
             linear_a: Vec::new(),
@@ -344,6 +375,8 @@ impl<M: ShipMotion> CompiledModel<M> {
         // A free rotor's absolute spin is fixed by the start: relative spin + carrier rate.
         model.update_free_rotors(&x);
         model.precessional = model.find_precessional(&x);
+        model.precessional_rows = (0..ni).filter(|&j| model.precessional[j]).collect();
+        model.inertial_rows = (0..ni).filter(|&j| !model.precessional[j]).collect();
         model.drop_full = vec![false; n];
         for (col, &i) in model.independent.iter().enumerate() {
             model.drop_full[i] = model.precessional[col];
@@ -474,26 +507,52 @@ impl<M: ShipMotion> CompiledModel<M> {
         self.jacobian_at(self.fidelity, t, x, jac);
     }
 
-    /// Exact Jacobian of the equations at a given fidelity (`full` or `gyroscopic`).
+    /// Exact Jacobian of the equations at a given fidelity (`full` or `gyroscopic`), by dual
+    /// numbers carrying several state directions at once (one pass for up to 8 states).
     pub fn jacobian_at(&self, fidelity: Fidelity, t: f64, x: &[f64], jac: &mut [f64]) {
-        let dim = if fidelity == Fidelity::Gyroscopic {
-            self.dim()
-        } else {
-            2 * self.independent.len()
-        };
-        let mut xj = vec![Jet::<f64, 1>::constant(0.0); dim];
-        let mut dxj = vec![Jet::<f64, 1>::constant(0.0); dim];
-        for col in 0..dim {
+        macro_rules! go {
+            ($n:literal, $d:literal) => {
+                self.jacobian_n::<$n, $d>(fidelity, t, x, jac)
+            };
+        }
+        by_width!(self.chain.n, go)
+    }
+
+    fn jacobian_n<const N: usize, const D: usize>(
+        &self,
+        fidelity: Fidelity,
+        t: f64,
+        x: &[f64],
+        jac: &mut [f64],
+    ) {
+        let dim = self.dim_at(fidelity);
+        let mut xj = [Jet::<f64, D>::constant(0.0); 2 * MAX_COORDINATES];
+        let mut dxj = [Jet::<f64, D>::constant(0.0); 2 * MAX_COORDINATES];
+        let mut first = 0;
+        while first < dim {
             for i in 0..dim {
-                xj[i] = Jet {
-                    v: x[i],
-                    d: [if i == col { 1.0 } else { 0.0 }],
-                };
+                let mut d = [0.0; D];
+                if i >= first && i - first < D {
+                    d[i - first] = 1.0;
+                }
+                xj[i] = Jet { v: x[i], d };
             }
-            self.rhs_generic(fidelity, Jet::constant(t), &xj, &mut dxj);
+            self.rhs_n::<Jet<f64, D>, N>(fidelity, Jet::constant(t), &xj[..dim], &mut dxj[..dim]);
             for row in 0..dim {
-                jac[row * dim + col] = dxj[row].d[0];
+                for col in first..dim.min(first + D) {
+                    jac[row * dim + col] = dxj[row].d[col - first];
+                }
             }
+            first += D;
+        }
+    }
+
+    fn dim_at(&self, fidelity: Fidelity) -> usize {
+        let ni = self.independent.len();
+        if fidelity == Fidelity::Gyroscopic {
+            ni + self.inertial_rows.len()
+        } else {
+            2 * ni
         }
     }
 
@@ -537,9 +596,11 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
     }
 
-    /// Forms the reduced equations: M_red (ni×ni), K_red (ni×ni), c_red (ni) at (t, q_ind, qd_ind, u_ind).
+    /// Forms the reduced equations with the world-axes reference engine
+    /// ([`crate::engine::evaluate`]): M_red (ni×ni), K_red (ni×ni), c_red (ni) at
+    /// (t, q_ind, qd_ind, u_ind).
     #[allow(clippy::too_many_arguments)]
-    fn reduced<T: Real>(
+    fn reduced_reference<T: Real>(
         &self,
         drop_precessional_inertia: bool,
         t: T,
@@ -603,13 +664,10 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
     }
 
-    pub(crate) fn rhs_generic<T: Real>(
-        &self,
-        fidelity: Fidelity,
-        t: T,
-        x: &[T],
-        dx: &mut [T],
-    ) -> bool {
+    /// ẋ by the world-axes reference engine, as the model computed it before the body-axes
+    /// engine: kept so tests can hold [`CompiledModel::rhs`] to it (nested duals give its
+    /// Jacobian). Generic so that nothing instantiates it unless a test calls it.
+    pub fn rhs_reference<T: Real>(&self, fidelity: Fidelity, t: T, x: &[T], dx: &mut [T]) -> bool {
         const MX: usize = MAX_COORDINATES + 1;
         let ni = self.independent.len();
         let mut m = [T::zero(); MX * MX];
@@ -627,7 +685,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                     }
                 }
                 let u = qd;
-                self.reduced(
+                self.reduced_reference(
                     true,
                     t,
                     q,
@@ -682,7 +740,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             }
             _ => {
                 let qd = &x[ni..2 * ni];
-                self.reduced(
+                self.reduced_reference(
                     false,
                     t,
                     q,
@@ -710,49 +768,274 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
     }
 
+    /// ẋ at any fidelity but `linear`, on any scalar (dual numbers give the Jacobian).
+    pub(crate) fn rhs_generic<T: Real>(
+        &self,
+        fidelity: Fidelity,
+        t: T,
+        x: &[T],
+        dx: &mut [T],
+    ) -> bool {
+        macro_rules! go {
+            ($n:literal, $d:literal) => {
+                self.rhs_n::<T, $n>(fidelity, t, x, dx)
+            };
+        }
+        by_width!(self.chain.n, go)
+    }
+
+    /// The reduced equations at (t, q_ind, qd_ind, u_ind): M_red, K_red (ni×ni) and c_red (ni),
+    /// by the body-axes engine. Without servo relations they are the chain's own equations;
+    /// otherwise the driven rows are dropped and their columns folded into their drivers'.
+    #[allow(clippy::too_many_arguments)]
+    fn reduced_n<T: Real, const N: usize>(
+        &self,
+        drop_precessional_inertia: bool,
+        t: T,
+        q_ind: &[T],
+        qd_ind: &[T],
+        u_ind: &[T],
+        m_red: &mut [[T; N]; N],
+        k_red: &mut [[T; N]; N],
+        c_red: &mut [T; N],
+    ) {
+        let n = self.chain.n;
+        let ni = self.independent.len();
+        let (r, w, g) = self.base_at(t);
+        let drop: &[bool] = if drop_precessional_inertia {
+            &self.drop_full
+        } else {
+            &[]
+        };
+        if self.no_servo {
+            let inp = EvalInput {
+                q: q_ind,
+                qd: qd_ind,
+                u: u_ind,
+                drop_quadratic: drop,
+                spin_momentum: &self.spin_momentum,
+                world_from_base: &r,
+                base_rate: &w,
+                gravity: g,
+            };
+            kinetics::evaluate::<T, N>(&self.kinetics, &inp, m_red, k_red, c_red);
+            return;
+        }
+        let mut q = [T::zero(); N];
+        let mut qd = [T::zero(); N];
+        let mut u = [T::zero(); N];
+        self.expand(q_ind, &mut q[..n], true);
+        self.expand(qd_ind, &mut qd[..n], false);
+        self.expand(u_ind, &mut u[..n], false);
+        let inp = EvalInput {
+            q: &q[..n],
+            qd: &qd[..n],
+            u: &u[..n],
+            drop_quadratic: drop,
+            spin_momentum: &self.spin_momentum,
+            world_from_base: &r,
+            base_rate: &w,
+            gravity: g,
+        };
+        let mut m = [[T::zero(); N]; N];
+        let mut k = [[T::zero(); N]; N];
+        let mut c = [T::zero(); N];
+        kinetics::evaluate::<T, N>(&self.kinetics, &inp, &mut m, &mut k, &mut c);
+        let s = &self.servo_s;
+        for (ri, &i) in self.independent.iter().enumerate() {
+            c_red[ri] = c[i];
+            for cj in 0..ni {
+                let mut sm = T::zero();
+                let mut sk = T::zero();
+                for l in 0..n {
+                    let a = s[l * ni + cj];
+                    if a != 0.0 {
+                        sm += m[i][l] * a;
+                        sk += k[i][l] * a;
+                    }
+                }
+                m_red[ri][cj] = sm;
+                k_red[ri][cj] = sk;
+            }
+        }
+    }
+
+    fn rhs_n<T: Real, const N: usize>(
+        &self,
+        fidelity: Fidelity,
+        t: T,
+        x: &[T],
+        dx: &mut [T],
+    ) -> bool {
+        let ni = self.independent.len();
+        let mut m = [[T::zero(); N]; N];
+        let mut k = [[T::zero(); N]; N];
+        let mut c = [T::zero(); N];
+        let q = &x[..ni];
+        match fidelity {
+            Fidelity::Gyroscopic => {
+                let gi = &self.precessional_rows;
+                let mis = &self.inertial_rows;
+                let mut qd = [T::zero(); N];
+                for (a, &col) in mis.iter().enumerate() {
+                    qd[col] = x[ni + a];
+                }
+                self.reduced_n::<T, N>(true, t, q, &qd[..ni], &qd[..ni], &mut m, &mut k, &mut c);
+                // Precession equations: K_gg q̇_g = −(c_g + K_gm q̇_m).
+                let ng = gi.len();
+                let mut a = [[T::zero(); N]; N];
+                let mut r = [T::zero(); N];
+                for (a_r, &i) in gi.iter().enumerate() {
+                    let mut s = c[i];
+                    for &j in mis {
+                        s += k[i][j] * qd[j];
+                    }
+                    r[a_r] = -s;
+                    for (a_c, &j) in gi.iter().enumerate() {
+                        a[a_r][a_c] = k[i][j];
+                    }
+                }
+                if !linalg::solve_nested(&mut a, &mut r, ng) {
+                    return false;
+                }
+                for (a_r, &i) in gi.iter().enumerate() {
+                    qd[i] = r[a_r];
+                }
+                dx[..ni].copy_from_slice(&qd[..ni]);
+                let nm = mis.len();
+                if nm > 0 {
+                    let mut mm = [[T::zero(); N]; N];
+                    let mut rm = [T::zero(); N];
+                    for (a_r, &i) in mis.iter().enumerate() {
+                        let mut s = c[i];
+                        for j in 0..ni {
+                            s += k[i][j] * qd[j];
+                        }
+                        rm[a_r] = s;
+                        for (a_c, &j) in mis.iter().enumerate() {
+                            mm[a_r][a_c] = m[i][j];
+                        }
+                    }
+                    if !linalg::solve_nested(&mut mm, &mut rm, nm) {
+                        return false;
+                    }
+                    dx[ni..ni + nm].copy_from_slice(&rm[..nm]);
+                }
+                true
+            }
+            _ => {
+                let qd = &x[ni..2 * ni];
+                self.reduced_n::<T, N>(false, t, q, qd, qd, &mut m, &mut k, &mut c);
+                let mut r = [T::zero(); N];
+                for i in 0..ni {
+                    let mut s = c[i];
+                    for j in 0..ni {
+                        s += k[i][j] * qd[j];
+                    }
+                    r[i] = s;
+                }
+                if !linalg::solve_nested(&mut m, &mut r, ni) {
+                    return false;
+                }
+                dx[..ni].copy_from_slice(qd);
+                dx[ni..2 * ni].copy_from_slice(&r[..ni]);
+                true
+            }
+        }
+    }
+
+    /// The static equations (rates zero) at t = 0: c (the residual torques) and, if asked, K.
+    fn statics(&self, q: &[f64], c_out: &mut [f64], k_out: Option<&mut [f64]>) {
+        macro_rules! go {
+            ($n:literal, $d:literal) => {
+                self.statics_n::<$n>(q, c_out, k_out)
+            };
+        }
+        by_width!(self.chain.n, go)
+    }
+
+    fn statics_n<const N: usize>(&self, q: &[f64], c_out: &mut [f64], k_out: Option<&mut [f64]>) {
+        let ni = self.independent.len();
+        let zero = [0.0; N];
+        let mut m = [[0.0; N]; N];
+        let mut k = [[0.0; N]; N];
+        let mut c = [0.0; N];
+        self.reduced_n::<f64, N>(
+            false,
+            0.0,
+            q,
+            &zero[..ni],
+            &zero[..ni],
+            &mut m,
+            &mut k,
+            &mut c,
+        );
+        c_out[..ni].copy_from_slice(&c[..ni]);
+        if let Some(ko) = k_out {
+            for i in 0..ni {
+                ko[i * ni..(i + 1) * ni].copy_from_slice(&k[i][..ni]);
+            }
+        }
+    }
+
+    /// ∂c/∂q of the static equations at t = 0 (row-major ni×ni), by dual numbers.
+    fn static_stiffness(&self, q: &[f64], jac: &mut [f64]) {
+        macro_rules! go {
+            ($n:literal, $d:literal) => {
+                self.static_stiffness_n::<$n, $d>(q, jac)
+            };
+        }
+        by_width!(self.chain.n, go)
+    }
+
+    fn static_stiffness_n<const N: usize, const D: usize>(&self, q: &[f64], jac: &mut [f64]) {
+        let ni = self.independent.len();
+        let zj = [Jet::<f64, D>::constant(0.0); N];
+        let mut qj = [Jet::<f64, D>::constant(0.0); N];
+        let mut first = 0;
+        while first < ni {
+            for i in 0..ni {
+                let mut d = [0.0; D];
+                if i >= first && i - first < D {
+                    d[i - first] = 1.0;
+                }
+                qj[i] = Jet { v: q[i], d };
+            }
+            let mut m = [[Jet::<f64, D>::constant(0.0); N]; N];
+            let mut k = [[Jet::<f64, D>::constant(0.0); N]; N];
+            let mut c = [Jet::<f64, D>::constant(0.0); N];
+            self.reduced_n::<Jet<f64, D>, N>(
+                false,
+                Jet::constant(0.0),
+                &qj[..ni],
+                &zj[..ni],
+                &zj[..ni],
+                &mut m,
+                &mut k,
+                &mut c,
+            );
+            for row in 0..ni {
+                for col in first..ni.min(first + D) {
+                    jac[row * ni + col] = c[row].d[col - first];
+                }
+            }
+            first += D;
+        }
+    }
+
     /// Newton's method on the static equations (rates zero) at t = 0, from `q_start`.
     fn equilibrium(&self, q_start: &[f64]) -> Result<Vec<f64>, ModelError> {
         let ni = self.independent.len();
         let mut q = q_start.to_vec();
-        let zero = vec![0.0; ni];
-        let mut m = vec![0.0; ni * ni];
-        let mut k = vec![0.0; ni * ni];
         let mut c = vec![0.0; ni];
-        let residual = |q: &[f64], c: &mut [f64], m: &mut [f64], k: &mut [f64]| {
-            self.reduced(false, 0.0, q, &zero, &zero, m, k, c);
-        };
-        residual(&q, &mut c, &mut m, &mut k);
+        let residual = |q: &[f64], c: &mut [f64]| self.statics(q, c, None);
+        residual(&q, &mut c);
         let scale = c.iter().map(|x| x.abs()).fold(0.0, f64::max).max(1e-300);
         let mut norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
         for _ in 0..60 {
-            // Jacobian of the static torques by dual numbers, column by column.
+            // Jacobian of the static torques by dual numbers.
             let mut jac = vec![0.0; ni * ni];
-            let mut qj = vec![Jet::<f64, 1>::constant(0.0); ni];
-            let zj = vec![Jet::<f64, 1>::constant(0.0); ni];
-            let mut mj = vec![Jet::<f64, 1>::constant(0.0); ni * ni];
-            let mut kj = vec![Jet::<f64, 1>::constant(0.0); ni * ni];
-            let mut cj = vec![Jet::<f64, 1>::constant(0.0); ni];
-            for col in 0..ni {
-                for i in 0..ni {
-                    qj[i] = Jet {
-                        v: q[i],
-                        d: [if i == col { 1.0 } else { 0.0 }],
-                    };
-                }
-                self.reduced(
-                    false,
-                    Jet::constant(0.0),
-                    &qj,
-                    &zj,
-                    &zj,
-                    &mut mj,
-                    &mut kj,
-                    &mut cj,
-                );
-                for row in 0..ni {
-                    jac[row * ni + col] = cj[row].d[0];
-                }
-            }
+            self.static_stiffness(&q, &mut jac);
             let mut step: Vec<f64> = c.iter().map(|x| -x).collect();
             if !solve_in_place(&mut jac, &mut step, ni) {
                 return Err(ModelError::NoEquilibrium("the static stiffness matrix is singular (is every coordinate restrained by gravity, a spring or the Earth's rotation?)".into()));
@@ -761,7 +1044,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             let mut lambda = 1.0;
             loop {
                 let trial: Vec<f64> = q.iter().zip(&step).map(|(a, b)| a + lambda * b).collect();
-                residual(&trial, &mut c, &mut m, &mut k);
+                residual(&trial, &mut c);
                 let tn = c.iter().map(|x| x * x).sum::<f64>().sqrt();
                 if tn < norm || lambda < 1e-6 {
                     q = trial;
@@ -786,11 +1069,9 @@ impl<M: ShipMotion> CompiledModel<M> {
     /// Precessional coordinates: rows of the gyroscopic (skew) part of K at rest.
     fn find_precessional(&self, x: &[f64]) -> Vec<bool> {
         let ni = self.independent.len();
-        let mut m = vec![0.0; ni * ni];
         let mut k = vec![0.0; ni * ni];
         let mut c = vec![0.0; ni];
-        let zero = vec![0.0; ni];
-        self.reduced(false, 0.0, &x[..ni], &zero, &zero, &mut m, &mut k, &mut c);
+        self.statics(&x[..ni], &mut c, Some(&mut k));
         let skew = |i: usize, j: usize| 0.5 * (k[i * ni + j] - k[j * ni + i]);
         let big = (0..ni)
             .flat_map(|i| (0..ni).map(move |j| (i, j)))
@@ -825,14 +1106,13 @@ impl<M: ShipMotion> CompiledModel<M> {
         let wv = V3(w.0.map(|x| x.v));
         let rates = crate::engine::body_angular_velocities(&self.chain, &q, &qd, &rr, &wv);
         for (bi, b) in self.design.bodies.iter().enumerate() {
-            if let Some(rot) = &b.rotor {
-                if rot.mode == SpinMode::Free {
-                    let poses = body_poses(&self.chain, &q, &rr);
-                    let s = M3(poses[bi].0).mul_v(&V3(rot.axis));
-                    let carrier = s.dot(&V3(rates[bi]));
-                    self.spin_momentum[bi] =
-                        rot.polar_inertia_kg_m2 * (rot.spin_rad_per_s + carrier);
-                }
+            if let Some(rot) = &b.rotor
+                && rot.mode == SpinMode::Free
+            {
+                let poses = body_poses(&self.chain, &q, &rr);
+                let s = M3(poses[bi].0).mul_v(&V3(rot.axis));
+                let carrier = s.dot(&V3(rates[bi]));
+                self.spin_momentum[bi] = rot.polar_inertia_kg_m2 * (rot.spin_rad_per_s + carrier);
             }
         }
     }

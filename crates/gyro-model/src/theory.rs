@@ -285,33 +285,6 @@ pub fn rolling_error_magnitude_rad(
         / tau
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn pendulum_period_matches_the_elliptic_integral() {
-        // δ = 0: T = 4K(k)/√(g/a); K(sin 45°) = 1.854074677301372.
-        let v = Villarceau {
-            g_over_a: 4.0,
-            delta: 0.0,
-        };
-        let t = v.period(PI / 2.0);
-        assert!((t - 4.0 * 1.854_074_677_301_372 / 2.0).abs() < 1e-13);
-    }
-
-    #[test]
-    fn quartic_roots_are_polished() {
-        // (r² + 1e-6)(r² + 1e6) = r⁴ + (1e6 + 1e-6) r² + 1
-        let roots = polynomial_roots(&[1.0, 0.0, 1e6 + 1e-6, 0.0, 1.0]);
-        let small = roots
-            .iter()
-            .map(|r| r.1.abs())
-            .fold(f64::INFINITY, f64::min);
-        assert!((small - 1e-3).abs() < 1e-15);
-    }
-}
-
 /// Villarceau's constants for a design built like the shipped `foucault-gyroscope` (a body
 /// `ring` hinged about its z axis on the base, carrying a body `torus` with a rotor), from the
 /// design's own numbers and the model's spin momentum, at a latitude. Also returns the hinge
@@ -358,4 +331,31 @@ pub fn foucault_villarceau(
         eta,
     });
     Some((v, offset))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pendulum_period_matches_the_elliptic_integral() {
+        // δ = 0: T = 4K(k)/√(g/a); K(sin 45°) = 1.854074677301372.
+        let v = Villarceau {
+            g_over_a: 4.0,
+            delta: 0.0,
+        };
+        let t = v.period(PI / 2.0);
+        assert!((t - 4.0 * 1.854_074_677_301_372 / 2.0).abs() < 1e-13);
+    }
+
+    #[test]
+    fn quartic_roots_are_polished() {
+        // (r² + 1e-6)(r² + 1e6) = r⁴ + (1e6 + 1e-6) r² + 1
+        let roots = polynomial_roots(&[1.0, 0.0, 1e6 + 1e-6, 0.0, 1.0]);
+        let small = roots
+            .iter()
+            .map(|r| r.1.abs())
+            .fold(f64::INFINITY, f64::min);
+        assert!((small - 1e-3).abs() < 1e-15);
+    }
 }

@@ -45,9 +45,9 @@ fn print_equilibrium_and_modes() {
         let m = model(lat, Fidelity::Full);
         let d = &m.design;
         let th = Anschutz {
-            spin_momentum: d.parameter("spin_momentum_n_m_s").unwrap(),
-            pendulous_moment: d.parameter("pendulous_moment_n_m").unwrap(),
-            kappa: d.parameter("kappa_n_m").unwrap(),
+            spin_momentum: d.parameter("spin_momentum_n_m_s").expect("present"),
+            pendulous_moment: d.parameter("pendulous_moment_n_m").expect("present"),
+            kappa: d.parameter("kappa_n_m").expect("present"),
             inertia_vertical: 0.05,
             inertia_east_west: 0.05,
             latitude_rad: (lat as f64).to_radians(),

@@ -52,10 +52,10 @@ fn compile(d: Design, lat_deg: f64, gamma0: f64) -> CompiledModel<Moored> {
 /// Villarceau's constants from the design's own numbers and the compiled model's spin.
 fn villarceau_of(m: &CompiledModel<Moored>, lat_deg: f64) -> (Villarceau, f64) {
     let d = &m.design;
-    let ring = &d.bodies[d.body_index("ring").unwrap()];
-    let torus_i = d.body_index("torus").unwrap();
+    let ring = &d.bodies[d.body_index("ring").expect("present")];
+    let torus_i = d.body_index("torus").expect("present");
     let torus = &d.bodies[torus_i];
-    let rotor = torus.rotor.as_ref().unwrap();
+    let rotor = torus.rotor.as_ref().expect("present");
     // Ring axis in the local frame and its polar distance.
     let z = [
         ring.joint_rotation[0][2],
@@ -96,7 +96,7 @@ fn villarceau_of(m: &CompiledModel<Moored>, lat_deg: f64) -> (Villarceau, f64) {
         n: m.spin_momentum[torus_i] / rotor.polar_inertia_kg_m2,
         omega: EARTH_RATE_RAD_PER_S,
         theta_ring: cos_tp.clamp(-1.0, 1.0).acos(),
-        eta: d.parameter("eta_deg").unwrap().to_radians(),
+        eta: d.parameter("eta_deg").expect("present").to_radians(),
     });
     (v, offset)
 }

@@ -662,7 +662,7 @@ impl Scene {
             ));
         }
         let max_step = sim.max_step_s.unwrap_or(f64::INFINITY);
-        if !(max_step > 0.0) {
+        if max_step.is_nan() || max_step <= 0.0 {
             return Err(err(
                 Some("[simulation]"),
                 "max_step_s",
@@ -730,7 +730,7 @@ impl Scene {
             offsets.push((i, deg.to_radians()));
         }
         let pose_rate = sim.pose_rate_hz.unwrap_or(rate.min(10.0));
-        if !(pose_rate > 0.0) {
+        if pose_rate.is_nan() || pose_rate <= 0.0 {
             return Err(err(
                 Some("[simulation]"),
                 "pose_rate_hz",

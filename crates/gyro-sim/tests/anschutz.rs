@@ -145,7 +145,7 @@ fn latitude_error_matches_eq_18() {
             .expect("L0")
             .to_radians();
         let th = theory(d, lat);
-        let l = (lat as f64).to_radians();
+        let l = lat.to_radians();
         let expect = th.kappa * (l0.sin() - l.sin()) / (th.pendulous_moment * l.cos());
         let (sim, out, _) = run(&sc, Method::Rodas4, tol(1e-10, 1e-13));
         // The run starts at the equilibrium and stays there.
@@ -205,7 +205,10 @@ fn three_fidelities_agree_to_their_model_error() {
         );
         let sc = scene_from(&text, &SceneOverrides::default());
         let (sim, out, stats) = run(&sc, Method::Rodas4, tol(1e-9, 1e-12));
-        assert_eq!(sim.model.fidelity, fid.parse::<Fidelity>().unwrap());
+        assert_eq!(
+            sim.model.fidelity,
+            fid.parse::<Fidelity>().expect("present")
+        );
         let e: Vec<f64> = out
             .iter()
             .map(|(t, x)| sim.model.readout(*t, x).reading_error_rad)
@@ -244,8 +247,11 @@ fn earth_rate_sets_the_directive_moment() {
     // τ = IΩε cos L is what the engine's slow mode sees: check through the undamped period at the
     // Equator against an independent formula.
     let sc = scene_from(&harbour(0.0, "", "", 1.0), &SceneOverrides::default());
-    let h = sc.design.parameter("spin_momentum_n_m_s").unwrap();
-    let ap = sc.design.parameter("pendulous_moment_n_m").unwrap();
+    let h = sc.design.parameter("spin_momentum_n_m_s").expect("present");
+    let ap = sc
+        .design
+        .parameter("pendulous_moment_n_m")
+        .expect("present");
     let t = TAU * (h / (ap * EARTH_RATE_RAD_PER_S)).sqrt();
     assert!((theory(&sc.design, 0.0).undamped_period() - t).abs() < 1e-9);
 }

@@ -30,10 +30,12 @@ fn speed_error_of_a_30_kn_run_north_at_50n() {
         let d = &sc.design;
         let l0 = d
             .parameter("compensation_latitude_deg")
-            .unwrap()
+            .expect("compensation_latitude_deg")
             .to_radians();
-        let lat_err = d.parameter("kappa_n_m").unwrap() * (l0.sin() - lat.sin())
-            / (d.parameter("pendulous_moment_n_m").unwrap() * lat.cos());
+        let lat_err = d.parameter("kappa_n_m").expect("kappa_n_m") * (l0.sin() - lat.sin())
+            / (d.parameter("pendulous_moment_n_m")
+                .expect("pendulous_moment_n_m")
+                * lat.cos());
         let rel = (err / (expect + lat_err) - 1.0).abs();
         assert!(
             rel < 0.02,
@@ -81,7 +83,7 @@ fn residual_after_stop(period_s: f64) -> f64 {
         .iter()
         .filter(|(t, _)| *t < 3600.0)
         .map(|(_, x)| *x)
-        .last()
+        .next_back()
         .unwrap_or(f64::NAN);
     assert!(
         (shift / formula - 1.0).abs() < 0.02,
@@ -144,8 +146,12 @@ fn rolling_mean_error(scene: &str) -> (f64, f64) {
         .collect();
     let mean = tail.iter().sum::<f64>() / tail.len() as f64;
     let d = &sc.design;
-    let h = d.parameter("spin_momentum_n_m_s").unwrap();
-    let ap = d.parameter("pendulous_moment_n_m").unwrap();
+    let h = d
+        .parameter("spin_momentum_n_m_s")
+        .expect("spin_momentum_n_m_s");
+    let ap = d
+        .parameter("pendulous_moment_n_m")
+        .expect("pendulous_moment_n_m");
     let tau = h * EARTH_RATE_RAD_PER_S * sc.start_latitude_rad.cos();
     let s = std::f64::consts::TAU / sc.program.sea.roll_period_s;
     let j0 = sc.pivot_m[2] * sc.program.sea.roll_amplitude_rad.sin() * s * s;
