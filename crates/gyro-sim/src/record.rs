@@ -103,7 +103,7 @@ pub fn record(
     let model = &sim.model;
     let rhs_cost_ns = sim.rhs_cost_ns();
     let rec_err = |e: gyro_mcap::RecordingError| RunError::Record(e.to_string());
-    let mut w = RecordingWriter::create(out, opts.writer.clone()).map_err(rec_err)?;
+    let mut w = RecordingWriter::create(out, opts.writer).map_err(rec_err)?;
 
     // Channels.
     let coords: Vec<String> = model
@@ -310,6 +310,24 @@ pub fn record(
             }
         })
         .collect();
+    // One pose message per frame, built once: a sample only updates the numbers (no frame id
+    // strings are copied per sample).
+    let mut ship_pose = Pose {
+        parent_frame: "earth".into(),
+        child_frame: "ship".into(),
+        translation_m: [0.0; 3],
+        rotation_xyzw: [0.0, 0.0, 0.0, 1.0],
+    };
+    let mut body_pose_msgs: Vec<Pose> = names
+        .iter()
+        .zip(&parents)
+        .map(|(name, parent)| Pose {
+            parent_frame: parent.clone(),
+            child_frame: name.clone(),
+            translation_m: [0.0; 3],
+            rotation_xyzw: [0.0, 0.0, 0.0, 1.0],
+        })
+        .collect();
 
     let interrupt = opts.interrupt.clone();
     let result = sim.run(scene.method, &scene.tolerances, |t, x| {
@@ -353,23 +371,15 @@ pub fn record(
                 g[2],
             ];
             w.write_f64_record(ship_ch, ns(t), &ship_vals)?;
-            if sample % pose_every == 0 {
+            if sample.is_multiple_of(pose_every) {
                 let base = model.world_from_base(t);
                 let ship = if model.design.root == Root::Ship {
                     base
                 } else {
                     gyro_model::earth::world_from_ship(&k, &model.effects.base).0
                 };
-                w.write_pose(
-                    tf_ch,
-                    ns(t),
-                    &Pose {
-                        parent_frame: "earth".into(),
-                        child_frame: "ship".into(),
-                        translation_m: [0.0; 3],
-                        rotation_xyzw: quat_from_matrix(&ship),
-                    },
-                )?;
+                ship_pose.rotation_xyzw = quat_from_matrix(&ship);
+                w.write_pose(tf_ch, ns(t), &ship_pose)?;
                 let poses = model.body_poses(t, &r.q);
                 for (bi, (rot, pos)) in poses.iter().enumerate() {
                     // parent_from_child = parent_worldᵀ · child_world.
@@ -379,17 +389,10 @@ pub fn record(
                     };
                     let rel = mat_t_mul(&prot, rot);
                     let d = [pos[0] - ppos[0], pos[1] - ppos[1], pos[2] - ppos[2]];
-                    let tr = mat_t_vec(&prot, d);
-                    w.write_pose(
-                        tf_ch,
-                        ns(t),
-                        &Pose {
-                            parent_frame: parents[bi].clone(),
-                            child_frame: names[bi].clone(),
-                            translation_m: tr,
-                            rotation_xyzw: quat_from_matrix(&rel),
-                        },
-                    )?;
+                    let msg = &mut body_pose_msgs[bi];
+                    msg.translation_m = mat_t_vec(&prot, d);
+                    msg.rotation_xyzw = quat_from_matrix(&rel);
+                    w.write_pose(tf_ch, ns(t), msg)?;
                 }
             }
             Ok(())
@@ -399,11 +402,11 @@ pub fn record(
             return ControlFlow::Break(());
         }
         sample += 1;
-        if let Some(p) = opts.progress.as_mut() {
-            if last_progress.elapsed().as_secs_f64() > 0.1 {
-                p(t);
-                last_progress = Instant::now();
-            }
+        if let Some(p) = opts.progress.as_mut()
+            && last_progress.elapsed().as_secs_f64() > 0.1
+        {
+            p(t);
+            last_progress = Instant::now();
         }
         if interrupt
             .as_ref()
