@@ -1,6 +1,8 @@
 //! Throughput of the recording contract on a realistic load: a 20-field f64 record channel and
 //! a 6-frame pose channel at 10 Hz for a simulated 24 h (864 000 records + 5 184 000 poses).
 //! `cargo bench -p gyro-mcap --bench throughput` (set GYRO_MCAP_BENCH_HOURS to change the length).
+//! `benches/python/peer_throughput.py` does the same load with the reference Python libraries,
+//! to compare the two at the same moment on a shared machine.
 
 use std::time::Instant;
 

@@ -25,8 +25,10 @@ use crate::schema::{
 pub struct WriterOptions {
     /// Uncompressed bytes of records after which a chunk is closed. Default 1 MiB.
     pub chunk_size_bytes: u64,
-    /// zstd level of chunk compression. Default 1: compression is most of the writer's time, and
-    /// level 3 saves only ~10 % of the size on simulation data.
+    /// zstd level of chunk compression. Default -1 (zstd's fastest regular strategy with a
+    /// little acceleration): compression is most of the writer's CPU, and on recordings of the
+    /// shipped scenes level -1 compresses 1.34× faster than level 1 for files 3 % larger
+    /// (772 vs 575 MB/s, ratio 4.35 vs 4.48; level 3: 377 MB/s, ratio 4.57).
     pub zstd_level: i32,
     /// Wall-clock seconds after which an open chunk is closed and handed to the operating system,
     /// however small, so a killed process loses at most this much. Default 1.0.
@@ -37,7 +39,7 @@ impl Default for WriterOptions {
     fn default() -> Self {
         Self {
             chunk_size_bytes: 1 << 20,
-            zstd_level: 1,
+            zstd_level: -1,
             flush_interval_s: 1.0,
         }
     }
