@@ -46,6 +46,10 @@ pub struct Figure {
     pub series: Vec<Series>,
     pub width_px: u32,
     pub height_px: u32,
+    /// Logarithmic x axis (decade ticks); non-positive x values are left out.
+    pub log_x: bool,
+    /// Logarithmic y axis (decade ticks); non-positive y values are left out.
+    pub log_y: bool,
 }
 
 impl Figure {
@@ -57,7 +61,45 @@ impl Figure {
             series: Vec::new(),
             width_px: 1200,
             height_px: 700,
+            log_x: false,
+            log_y: false,
         }
+    }
+
+    /// Several figures in one SVG, `cols` per row (each at its own size; cells are the largest).
+    pub fn grid_svg(figures: &[Figure], cols: usize) -> String {
+        let (cw, ch, w, h) = grid_size(figures, cols);
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="DejaVu Sans, Helvetica, Arial, sans-serif">"#
+        );
+        let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
+        for (i, f) in figures.iter().enumerate() {
+            let (x, y) = ((i % cols.max(1)) as u32 * cw, (i / cols.max(1)) as u32 * ch);
+            let inner = f.to_svg();
+            // The figure's own document, nested: an <svg> element places itself at x, y.
+            let inner = inner.replacen("<svg ", &format!(r#"<svg x="{x}" y="{y}" "#), 1);
+            s.push_str(&inner);
+        }
+        s.push_str("</svg>\n");
+        s
+    }
+
+    /// Several figures in one PNG, `cols` per row.
+    pub fn grid_png(figures: &[Figure], cols: usize) -> std::result::Result<Vec<u8>, String> {
+        let (cw, ch, w, h) = grid_size(figures, cols);
+        let mut canvas = Canvas::new(w, h);
+        for (i, f) in figures.iter().enumerate() {
+            let (dx, dy) = (
+                f64::from((i % cols.max(1)) as u32 * cw),
+                f64::from((i / cols.max(1)) as u32 * ch),
+            );
+            for p in &f.layout() {
+                canvas.draw(&p.shifted(dx, dy));
+            }
+        }
+        canvas.encode_png()
     }
 
     /// The SVG document.
@@ -163,7 +205,7 @@ impl Figure {
 
     fn layout(&self) -> Vec<Prim> {
         let (w, h) = (self.width_px as f64, self.height_px as f64);
-        let (left, right, top, bottom) = (90.0, w - 250.0, 50.0, h - 60.0);
+        let (mut left, right, top, bottom) = (90.0, w - 250.0, 50.0, h - 60.0);
         let mut prims = vec![
             Prim::Rect {
                 x: 0.0,
@@ -174,7 +216,7 @@ impl Figure {
                 stroke: None,
             },
             Prim::Text {
-                x: (left + right) / 2.0,
+                x: w / 2.0,
                 y: 22.0,
                 text: self.title.clone(),
                 size: 2.4,
@@ -182,11 +224,13 @@ impl Figure {
                 vertical: false,
             },
         ];
+        let (log_x, log_y) = (self.log_x, self.log_y);
+        let axis = |v: f64, log: bool| if log { v.log10() } else { v };
         let finite = |s: &Series| -> Vec<(f64, f64)> {
             s.x.iter()
                 .zip(&s.y)
+                .map(|(a, b)| (axis(*a, log_x), axis(*b, log_y)))
                 .filter(|(a, b)| a.is_finite() && b.is_finite())
-                .map(|(a, b)| (*a, *b))
                 .collect()
         };
         let all: Vec<(f64, f64)> = self.series.iter().flat_map(finite).collect();
@@ -205,8 +249,26 @@ impl Figure {
                 (lo, hi)
             }
         };
-        let (x_ticks, (x0, x1)) = nice_ticks(range(|p| p.0));
-        let (y_ticks, (y0, y1)) = nice_ticks(range(|p| p.1));
+        let ticks = |r: (f64, f64), log: bool| {
+            if log { decade_ticks(r) } else { nice_ticks(r) }
+        };
+        let (x_ticks, (x0, x1)) = ticks(range(|p| p.0), log_x);
+        let (y_ticks, (y0, y1)) = ticks(range(|p| p.1), log_y);
+        let label = |t: f64, ticks: &[f64], log: bool| {
+            if log {
+                format!("1e{}", t.round() as i64)
+            } else {
+                tick_label(t, ticks)
+            }
+        };
+        // Room for the longest y tick label (16 px per character in the PNG at size 1.6) and
+        // the vertical axis label beside it.
+        let widest = y_ticks
+            .iter()
+            .map(|&t| label(t, &y_ticks, log_y).chars().count())
+            .max()
+            .unwrap_or(0);
+        left = f64::max(left, 44.0 + 16.0 * widest as f64);
         let px = |x: f64| left + (x - x0) / (x1 - x0) * (right - left);
         let py = |y: f64| bottom - (y - y0) / (y1 - y0) * (bottom - top);
         let grid = [225, 225, 225];
@@ -216,7 +278,7 @@ impl Figure {
             prims.push(text(
                 px(t),
                 bottom + 16.0,
-                tick_label(t, &x_ticks),
+                label(t, &x_ticks, log_x),
                 1.6,
                 Anchor::Middle,
             ));
@@ -226,7 +288,7 @@ impl Figure {
             prims.push(text(
                 left - 8.0,
                 py(t),
-                tick_label(t, &y_ticks),
+                label(t, &y_ticks, log_y),
                 1.6,
                 Anchor::End,
             ));
@@ -247,7 +309,7 @@ impl Figure {
             Anchor::Middle,
         ));
         prims.push(Prim::Text {
-            x: 22.0,
+            x: 16.0,
             y: (top + bottom) / 2.0,
             text: self.y_label.clone(),
             size: 2.0,
@@ -263,6 +325,11 @@ impl Figure {
                     width: s.width_px,
                     dashed: s.dashed,
                 });
+            } else if let [(x, y)] = pts[..] {
+                // A lone point (e.g. an exact method's one run): a cross.
+                for (dx, dy) in [(6.0, 6.0), (6.0, -6.0)] {
+                    prims.push(line(vec![(x - dx, y - dy), (x + dx, y + dy)], s.color, 2.0));
+                }
             }
         }
         // Legend to the right of the plot, at most 24 entries.
@@ -275,7 +342,9 @@ impl Figure {
                 width: s.width_px.max(2.0),
                 dashed: s.dashed,
             });
-            let name: String = s.name.chars().take(22).collect();
+            // As many characters as fit between the legend's line and the image's edge.
+            let room = ((w - right - 56.0) / 16.0).max(4.0) as usize;
+            let name: String = s.name.chars().take(room.min(22)).collect();
             prims.push(text(right + 52.0, y, name, 1.6, Anchor::Start));
             y += 20.0;
         }
@@ -340,6 +409,24 @@ fn nice_ticks((lo, hi): (f64, f64)) -> (Vec<f64>, (f64, f64)) {
     (ticks, (a, b))
 }
 
+/// Whole decades covering (lo, hi) of log10 values (at most 8 labelled: every k-th decade).
+fn decade_ticks((lo, hi): (f64, f64)) -> (Vec<f64>, (f64, f64)) {
+    let (a, b) = (lo.floor(), hi.ceil().max(lo.floor() + 1.0));
+    let n = (b - a) as usize;
+    let every = n.div_ceil(8).max(1);
+    let ticks = (0..=n).step_by(every).map(|i| a + i as f64).collect();
+    (ticks, (a, b))
+}
+
+fn grid_size(figures: &[Figure], cols: usize) -> (u32, u32, u32, u32) {
+    let cols = cols.max(1);
+    let cw = figures.iter().map(|f| f.width_px).max().unwrap_or(1);
+    let ch = figures.iter().map(|f| f.height_px).max().unwrap_or(1);
+    let rows = figures.len().div_ceil(cols).max(1) as u32;
+    let used_cols = cols.min(figures.len().max(1)) as u32;
+    (cw, ch, cw * used_cols, ch * rows)
+}
+
 fn tick_label(v: f64, ticks: &[f64]) -> String {
     let step = if ticks.len() >= 2 {
         (ticks[1] - ticks[0]).abs()
@@ -389,6 +476,25 @@ enum Prim {
         anchor: Anchor,
         vertical: bool,
     },
+}
+
+impl Prim {
+    fn shifted(&self, dx: f64, dy: f64) -> Prim {
+        let mut p = self.clone();
+        match &mut p {
+            Prim::Rect { x, y, .. } | Prim::Text { x, y, .. } => {
+                *x += dx;
+                *y += dy;
+            }
+            Prim::Line { points, .. } => {
+                for (x, y) in points {
+                    *x += dx;
+                    *y += dy;
+                }
+            }
+        }
+        p
+    }
 }
 
 struct Canvas {
@@ -607,5 +713,59 @@ mod tests {
         assert!(f.to_svg().contains("<polyline"));
         let png = f.to_png().unwrap_or_default();
         assert_eq!(&png[1..4], b"PNG");
+    }
+
+    #[test]
+    fn log_axes_put_decades_on_ticks_and_drop_non_positive_values() {
+        let mut f = Figure::new("t", "wall [s]", "error");
+        (f.log_x, f.log_y) = (true, true);
+        f.series.push(Series {
+            name: "a".into(),
+            x: vec![1e-4, 1e-3, 1e-2, 0.0],
+            y: vec![1e-2, 1e-6, 1e-10, 1e-12],
+            color: PALETTE[0],
+            dashed: false,
+            width_px: 2.0,
+        });
+        let svg = f.to_svg();
+        for label in ["1e-4", "1e-2", "1e-10", "1e-6"] {
+            assert!(svg.contains(&format!(">{label}<")), "{label} missing");
+        }
+        // The point at x = 0 has no logarithm: three vertices remain.
+        let line = svg
+            .lines()
+            .find(|l| l.contains("<polyline") && l.contains("#1f77b4"))
+            .unwrap_or_default();
+        let pts = line.split("points=\"").nth(1).unwrap_or_default();
+        assert_eq!(
+            pts.split('"').next().unwrap_or_default().split(' ').count(),
+            3
+        );
+        let (t, (a, b)) = decade_ticks((-10.3, -1.2));
+        assert_eq!((a, b), (-11.0, -1.0));
+        assert!(t.len() <= 9 && t[0] == -11.0, "{t:?}");
+    }
+
+    #[test]
+    fn a_grid_places_every_figure() {
+        let figs = vec![
+            Figure::new("one", "x", "y"),
+            Figure::new("two", "x", "y"),
+            Figure::new("three", "x", "y"),
+        ];
+        let svg = Figure::grid_svg(&figs, 2);
+        assert!(svg.starts_with("<svg") && svg.contains(r#"width="2400" height="1400""#));
+        assert!(svg.contains(r#"<svg x="0" y="700""#) && svg.contains(r#"<svg x="1200" y="0""#));
+        let png = Figure::grid_png(&figs, 2).unwrap_or_default();
+        assert_eq!(&png[1..4], b"PNG");
+        // IHDR: width and height, big-endian, at bytes 16..24.
+        assert_eq!(
+            u32::from_be_bytes([png[16], png[17], png[18], png[19]]),
+            2400
+        );
+        assert_eq!(
+            u32::from_be_bytes([png[20], png[21], png[22], png[23]]),
+            1400
+        );
     }
 }

@@ -561,3 +561,172 @@ pub fn view(
     }
     Ok(ExitCode::SUCCESS)
 }
+
+/// What `gyrolab accuracy` runs.
+pub struct AccuracyArgs {
+    pub cases: Vec<String>,
+    pub json: bool,
+    pub plot: Option<PathBuf>,
+    pub target_error: Option<f64>,
+    pub methods: Vec<String>,
+    pub list: bool,
+}
+
+pub fn accuracy(a: AccuracyArgs) -> Result<ExitCode, CliError> {
+    use gyro_sim::accuracy::{StudyOptions, case_descriptions, run_study};
+    if a.list {
+        let cases = case_descriptions();
+        if a.json {
+            let v: Vec<_> = cases
+                .iter()
+                .map(|(n, d)| json!({"name": n, "description": d}))
+                .collect();
+            println!("{}", serde_json::Value::Array(v));
+        } else {
+            for (n, d) in cases {
+                println!("{n:<22} {d}");
+            }
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    let mut opts = StudyOptions::default();
+    if let Some(e) = a.target_error {
+        if !(e > 0.0 && e < 1.0) {
+            return Err(bad(format!(
+                "--target-error: {e} is out of range (allowed: 0 < error < 1)"
+            )));
+        }
+        opts.target_error = e;
+    }
+    if !a.methods.is_empty() {
+        opts.methods = a
+            .methods
+            .iter()
+            .map(|m| {
+                m.parse::<Method>().map_err(|e| {
+                    bad(format!(
+                        "--methods: {e} (allowed: dopri5, dop853, rk4, rodas4)"
+                    ))
+                })
+            })
+            .collect::<Result<_, _>>()?;
+    }
+    // Check the plot's extension before spending a minute on the study.
+    let plot_kind = match &a.plot {
+        None => None,
+        Some(p) => match p.extension().and_then(|e| e.to_str()) {
+            Some(e) if e.eq_ignore_ascii_case("svg") => Some(false),
+            Some(e) if e.eq_ignore_ascii_case("png") => Some(true),
+            _ => {
+                return Err(bad(format!(
+                    "--plot {}: unknown image type (allowed: .svg or .png)",
+                    p.display()
+                )));
+            }
+        },
+    };
+    let report = run_study(&a.cases, &opts).map_err(|e| match e {
+        gyro_sim::accuracy::StudyError::UnknownCase(_) => bad(e),
+        _ => failed(e),
+    })?;
+    if let (Some(path), Some(png)) = (&a.plot, plot_kind) {
+        let figures = accuracy_figures(&report);
+        let bytes = if png {
+            gyro_analysis::plot::Figure::grid_png(&figures, 2)
+                .map_err(|e| failed(format!("{}: encoding PNG: {e}", path.display())))?
+        } else {
+            gyro_analysis::plot::Figure::grid_svg(&figures, 2).into_bytes()
+        };
+        write_whole(path, &bytes)?;
+    }
+    if a.json {
+        println!("{}", report.to_json());
+    } else {
+        print!("{}", report.table());
+        if let Some(p) = &a.plot {
+            println!("plot: {}", p.display());
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Writes `bytes` to `path` through a temporary name, so a failure never leaves half a file
+/// under the final name.
+fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| failed(format!("cannot create {}: {e}", dir.display())))?;
+    }
+    let tmp = path.with_extension(format!(
+        "{}.partial",
+        path.extension().and_then(|e| e.to_str()).unwrap_or("out")
+    ));
+    std::fs::write(&tmp, bytes)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            failed(format!("cannot write {}: {e}", path.display()))
+        })
+}
+
+/// One log-log panel per case: achieved error against wall time, one curve per method (per
+/// method and fidelity where the case has several), and the target error dashed.
+fn accuracy_figures(r: &gyro_sim::accuracy::StudyReport) -> Vec<gyro_analysis::plot::Figure> {
+    use gyro_analysis::plot::{Figure, PALETTE, Series};
+    let mut colours: Vec<String> = Vec::new();
+    let mut figures = Vec::new();
+    for c in &r.cases {
+        let several = c.points.iter().any(|p| p.fidelity != c.points[0].fidelity);
+        let mut f = Figure::new(&c.name, "wall time [s]", "achieved error");
+        (f.width_px, f.height_px) = (1040, 560);
+        (f.log_x, f.log_y) = (true, true);
+        let mut curves: Vec<String> = Vec::new();
+        for p in &c.points {
+            let k = p.curve(several).replace("gyroscopic", "gyro");
+            if !curves.contains(&k) {
+                curves.push(k);
+            }
+        }
+        let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+        for k in curves {
+            let mut pts: Vec<(f64, f64)> = c
+                .points
+                .iter()
+                .filter(|p| p.curve(several).replace("gyroscopic", "gyro") == k)
+                .filter_map(|p| p.error.filter(|e| *e > 0.0).map(|e| (p.wall_s, e)))
+                .collect();
+            if pts.is_empty() {
+                continue;
+            }
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            lo = pts.iter().fold(lo, |m, p| m.min(p.0));
+            hi = pts.iter().fold(hi, |m, p| m.max(p.0));
+            // The same colour for a curve in every panel.
+            let i = colours.iter().position(|n| *n == k).unwrap_or_else(|| {
+                colours.push(k.clone());
+                colours.len() - 1
+            });
+            let (x, y) = pts.into_iter().unzip();
+            f.series.push(Series {
+                name: k,
+                x,
+                y,
+                color: PALETTE[i % PALETTE.len()],
+                dashed: false,
+                width_px: 2.0,
+            });
+        }
+        if lo < hi {
+            f.series.push(Series {
+                name: format!("target {:.0e}", r.target_error),
+                x: vec![lo, hi],
+                y: vec![r.target_error; 2],
+                color: [120, 120, 120],
+                dashed: true,
+                width_px: 1.0,
+            });
+        }
+        figures.push(f);
+    }
+    figures
+}

@@ -116,6 +116,27 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Work-precision study: achieved error against wall time and RHS evaluations for every
+    /// integrator, tolerance (1e-3 … 1e-12) and fidelity, on references with exact answers.
+    Accuracy {
+        /// Cases to run (default: all; see --list).
+        cases: Vec<String>,
+        /// Print the report as JSON instead of tables.
+        #[arg(long)]
+        json: bool,
+        /// Write the log-log plot, one panel per case (.svg or .png).
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        /// Error the one-line verdicts aim at.
+        #[arg(long)]
+        target_error: Option<f64>,
+        /// Integrators to study, comma-separated (default: dopri5,dop853,rodas4,rk4).
+        #[arg(long, value_delimiter = ',')]
+        methods: Vec<String>,
+        /// List the cases and exit.
+        #[arg(long)]
+        list: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -152,6 +173,21 @@ fn main() -> ExitCode {
             out,
             json,
         } => commands::regress(&runs, &baseline, update, &out, json),
+        Command::Accuracy {
+            cases,
+            json,
+            plot,
+            target_error,
+            methods,
+            list,
+        } => commands::accuracy(commands::AccuracyArgs {
+            cases,
+            json,
+            plot,
+            target_error,
+            methods,
+            list,
+        }),
     };
     match result {
         Ok(code) => code,

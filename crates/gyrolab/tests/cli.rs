@@ -163,3 +163,67 @@ fn regression_check_passes_against_the_committed_baseline() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+#[test]
+fn accuracy_study_reports_errors_that_fall_with_the_tolerance_and_plots() {
+    let d = tmp("accuracy");
+    let plot = d.join("wp.png");
+    let out = gyrolab()
+        .args([
+            "accuracy",
+            "villarceau-small",
+            "--methods",
+            "dop853,rodas4",
+            "--json",
+            "--plot",
+        ])
+        .arg(&plot)
+        .output()
+        .expect("runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let case = &v["cases"][0];
+    assert_eq!(case["name"], "villarceau-small");
+    for method in ["dop853", "rodas4"] {
+        let errors: Vec<(f64, f64)> = case["points"]
+            .as_array()
+            .expect("points")
+            .iter()
+            .filter(|p| p["method"] == method)
+            .filter_map(|p| Some((p["rtol"].as_f64()?, p["error"].as_f64()?)))
+            .collect();
+        assert!(errors.len() >= 5, "{method}: {errors:?}");
+        // Ten-fold tighter tolerances, errors at least a hundred times smaller over the range.
+        let (loose, tight) = (errors[0], errors[errors.len() - 1]);
+        assert!(tight.1 < 1e-2 * loose.1, "{method}: {errors:?}");
+        assert!(tight.1 < 1e-7, "{method}: {errors:?}");
+    }
+    assert!(
+        case["verdict"]
+            .as_str()
+            .is_some_and(|s| s.starts_with("for 1e-6 on villarceau-small, use ")),
+        "{}",
+        case["verdict"]
+    );
+    let png = std::fs::read(&plot).expect("plot written");
+    assert_eq!(&png[1..4], b"PNG");
+    // Bad input is refused before any work: exit 2, naming what is allowed.
+    let out = gyrolab()
+        .args(["accuracy", "villarceau-tiny"])
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("allowed: villarceau-small"));
+    let out = gyrolab()
+        .args(["accuracy", "--plot"])
+        .arg(d.join("wp.jpg"))
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains(".svg or .png"));
+    assert!(!d.join("wp.jpg").exists());
+}
