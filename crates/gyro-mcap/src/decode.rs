@@ -126,8 +126,8 @@ pub(crate) struct RecordLayout {
 
 const MAX_INDEXED_NUMBER: i32 = 1 << 16;
 
-/// Rows reserved up front at most: counts come from an untrusted file's indexes (each row seen
-/// there is an index entry, so this only guards against absurd counts), beyond it vectors grow.
+/// Rows (values, for record columns) reserved up front at most: counts come from an untrusted
+/// file's indexes (each row seen there is an index entry); beyond it vectors grow with the data.
 pub(crate) const MAX_RESERVED_ROWS: usize = 1 << 24;
 
 impl RecordLayout {
@@ -243,9 +243,10 @@ impl RecordLayout {
         self.decode_into(data, columns)
     }
 
-    /// Empty columns with room for `n` rows (capped: `n` comes from the file's statistics).
+    /// Empty columns with room for `n` rows, capped at [`MAX_RESERVED_ROWS`] values in all
+    /// (`n` comes from an untrusted file's indexes, and a schema may declare thousands of fields).
     pub(crate) fn columns_with_capacity(&self, n: usize) -> Vec<Column> {
-        let n = n.min(MAX_RESERVED_ROWS);
+        let n = n.min(MAX_RESERVED_ROWS / self.decodings.len().max(1));
         self.decodings
             .iter()
             .map(|d| match d.empty_column() {
