@@ -490,11 +490,29 @@ pub fn regress(
         );
         return Ok(ExitCode::SUCCESS);
     }
-    let report = gyro_analysis::regress(&table, baseline, None).map_err(bad)?;
+    let mut report = gyro_analysis::regress(&table, baseline, None).map_err(bad)?;
+    // Recordings named on the command line are checked alone: the baseline's other runs are
+    // not missing, just not asked about.
+    let mut unchecked = Vec::new();
+    if !runs.is_empty() {
+        report.findings.retain(|f| {
+            let missing = f.status == gyro_analysis::regress::Status::MissingRun;
+            if missing {
+                unchecked.push(f.run.clone());
+            }
+            !missing
+        });
+    }
     if json {
         println!("{}", serde_json::to_string_pretty(&report).map_err(failed)?);
     } else {
-        println!("{}", report.render_terminal());
+        print!("{}", report.render_terminal());
+        if !unchecked.is_empty() {
+            println!(
+                "not checked (no recording of them given): {}",
+                unchecked.join(", ")
+            );
+        }
     }
     Ok(if report.passed() {
         ExitCode::SUCCESS

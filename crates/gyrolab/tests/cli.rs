@@ -227,3 +227,54 @@ fn accuracy_study_reports_errors_that_fall_with_the_tolerance_and_plots() {
     assert!(String::from_utf8_lossy(&out.stderr).contains(".svg or .png"));
     assert!(!d.join("wp.jpg").exists());
 }
+
+#[test]
+fn a_design_parameter_moved_by_5_percent_fails_regress_and_names_the_metric() {
+    let d = tmp("perturbed");
+    let root = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+    let design = std::fs::read_to_string(root.join("designs/anschutz-1906.toml")).expect("design");
+    let original = "pendulous_moment_n_m = \"= 15e6 * 1e-7\"";
+    assert!(design.contains(original), "the shipped design changed");
+    let perturbed = d.join("anschutz-1906-ap+5.toml");
+    std::fs::write(
+        &perturbed,
+        design.replace(original, "pendulous_moment_n_m = \"= 1.05 * 15e6 * 1e-7\""),
+    )
+    .expect("write");
+    let record = |design: &Path, out: &Path| {
+        let o = gyrolab()
+            .args(["run", "harbour-50n", "--quiet", "--design"])
+            .arg(design)
+            .arg("-o")
+            .arg(out)
+            .output()
+            .expect("runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    let (good, bad) = (d.join("good.mcap"), d.join("bad.mcap"));
+    record(&root.join("designs/anschutz-1906.toml"), &good);
+    record(&perturbed, &bad);
+    let regress = |rec: &Path| {
+        gyrolab()
+            .arg("regress")
+            .arg(rec)
+            .arg("--baseline")
+            .arg(root.join("analysis/baseline.toml"))
+            .output()
+            .expect("runs")
+    };
+    let ok = regress(&good);
+    assert!(
+        ok.status.success(),
+        "the unperturbed run passes:\n{}",
+        String::from_utf8_lossy(&ok.stdout)
+    );
+    let out = regress(&bad);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    // aP + 5 % shortens the period by ≈ 2.4 %, far outside its 0.1 % tolerance.
+    assert!(
+        text.contains("period_s") && text.contains("harbour-50n/anschutz-1906"),
+        "{text}"
+    );
+}
