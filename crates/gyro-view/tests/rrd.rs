@@ -435,3 +435,41 @@ fn spawn_without_viewer_saves_next_to_the_run() {
     assert!(status.success());
     assert!(dir.join("lonely.rrd").is_file());
 }
+
+#[test]
+fn the_default_fit_is_the_analysis_crates_and_is_drawn_over_the_data() {
+    let Some(py) = rerun_python() else {
+        return;
+    };
+    let dir = workdir("analysis-fit");
+    let run = dir.join("settle.mcap");
+    // 4000 s at 1 Hz: six cycles of the 600-s damped sinusoid after the last event (320 s).
+    common::write_recording(&run, 4000, 1.0);
+    let rrd = dir.join("settle.rrd");
+    let opts = ViewOptions {
+        sink: Sink::Save(rrd.clone()),
+        max_pose_rate_hz: 0.1,
+        ..Default::default()
+    };
+    view(std::slice::from_ref(&run), &opts).expect("view");
+    let d = dump(&py, &rrd);
+    let root = "/runs/settle";
+    let (t, v) = temporal(
+        &d,
+        &format!("{root}/series/reading_error_deg/fit"),
+        "scalars",
+    );
+    assert!(
+        t.len() > 3000,
+        "the fit spans its window: {} samples",
+        t.len()
+    );
+    let v = scalars(v);
+    let worst = t
+        .iter()
+        .zip(&v)
+        .map(|(&ns, &y)| (y - common::reading_error(ns as f64 * 1e-9).to_degrees()).abs())
+        .fold(0.0, f64::max);
+    // gyro-analysis's least-squares fit recovers the noiseless curve it was given.
+    assert!(worst < 1e-6, "fit vs data: {worst:e}°");
+}
