@@ -6,7 +6,8 @@
 //!   turns the `/tf` FrameTransforms into transforms of every body, with our numbers.
 //!
 //! Both install what they need into one virtual environment under the target directory, made
-//! once and reused. Skipped with a visible `SKIPPED:` line only where there is no python3 (and,
+//! once and reused: the one gyro-view's `.rrd` test makes for rerun-sdk 0.36.3 (same name, so a
+//! workspace test run downloads Rerun once), with the two mcap packages added. Skipped with a visible `SKIPPED:` line only where there is no python3 (and,
 //! for the Rerun half, where rerun-sdk cannot be installed: the line says why).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -34,7 +35,7 @@ fn venv_python() -> Option<PathBuf> {
     if Command::new("python3").arg("--version").output().is_err() {
         return None;
     }
-    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gyrolab-interop-pyenv");
+    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rerun-sdk-0.36.3-venv");
     let python = venv.join("bin").join("python");
     if !python.exists() {
         let ok = Command::new("python3")
