@@ -9,7 +9,9 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use gyro_mcap::{ChannelKind, Column as McapColumn, Recording};
+use gyro_mcap::{
+    ChannelKind, ChannelTable, Column as McapColumn, PoseTable, RecordTable, Recording,
+};
 use polars::prelude::*;
 use rayon::prelude::*;
 
@@ -218,15 +220,19 @@ pub fn load_run(path: &Path, opts: &LoadOptions) -> Result<Run> {
             })
             .collect(),
     };
-    // Channels decode independently: one per core (a lone long run loads this way too).
-    let frames = wanted
-        .par_iter()
-        .map(|ch| {
-            let frame = match ch.kind {
-                ChannelKind::Pose => pose_frame(&recording, &ch.topic, &run_id)?,
-                _ => record_frame(&recording, &ch.topic, &run_id)?,
+    // One pass over the file decompresses each chunk once for every channel asked for (the
+    // reader shares chunks among threads); the tables then become frames one per core.
+    let topics: Vec<&str> = wanted.iter().map(|c| c.topic.as_str()).collect();
+    let tables = recording.read_topics(&topics)?;
+    let frames = tables
+        .into_par_iter()
+        .zip(topics.par_iter())
+        .map(|(table, topic)| {
+            let frame = match table {
+                ChannelTable::Poses(p) => pose_frame(&recording, p, topic, &run_id)?,
+                ChannelTable::Records(r) => record_frame(&recording, r, topic, &run_id)?,
             };
-            Ok((ch.topic.clone(), frame))
+            Ok((topic.to_string(), frame))
         })
         .collect::<Result<BTreeMap<String, DataFrame>>>()?;
     Ok(Run {
@@ -244,8 +250,12 @@ pub fn load_runs<P: AsRef<Path> + Sync>(inputs: &[P], opts: &LoadOptions) -> Res
     paths.par_iter().map(|p| load_run(p, opts)).collect()
 }
 
-fn record_frame(recording: &Recording, topic: &str, run_id: &str) -> Result<DataFrame> {
-    let table = recording.read_records(topic)?;
+fn record_frame(
+    recording: &Recording,
+    table: RecordTable,
+    topic: &str,
+    run_id: &str,
+) -> Result<DataFrame> {
     let n = table.len();
     let ctx = || format!("{}: channel {topic:?}", recording.path().display());
     // Time: the record's own `time_s` field (exact) where present, else the log time.
@@ -283,8 +293,7 @@ fn record_frame(recording: &Recording, topic: &str, run_id: &str) -> Result<Data
     DataFrame::new(n, columns).map_err(AnalysisError::polars(ctx()))
 }
 
-fn pose_frame(recording: &Recording, topic: &str, run_id: &str) -> Result<DataFrame> {
-    let p = recording.read_poses(topic)?;
+fn pose_frame(recording: &Recording, p: PoseTable, topic: &str, run_id: &str) -> Result<DataFrame> {
     let n = p.len();
     let ctx = || format!("{}: channel {topic:?}", recording.path().display());
     let t: Vec<f64> = p.log_time_ns.iter().map(|&ns| ns as f64 * 1e-9).collect();
