@@ -89,12 +89,12 @@ fn overrides(a: &RunArgs) -> Result<SceneOverrides, CliError> {
         ("--rate-hz", a.rate_hz),
         ("--duration-s", a.duration_s),
     ] {
-        if let Some(x) = v {
-            if !(x > 0.0 && x.is_finite()) {
-                return Err(bad(format!(
-                    "{name}: {x} is out of range (allowed: a positive number)"
-                )));
-            }
+        if let Some(x) = v
+            && !(x > 0.0 && x.is_finite())
+        {
+            return Err(bad(format!(
+                "{name}: {x} is out of range (allowed: a positive number)"
+            )));
         }
     }
     Ok(SceneOverrides {
@@ -128,11 +128,11 @@ fn record_scene(
     out: &Path,
     quiet: bool,
 ) -> Result<gyro_sim::RecordSummary, CliError> {
-    if let Some(dir) = out.parent() {
-        if !dir.as_os_str().is_empty() {
-            std::fs::create_dir_all(dir)
-                .map_err(|e| failed(format!("cannot create {}: {e}", dir.display())))?;
-        }
+    if let Some(dir) = out.parent()
+        && !dir.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| failed(format!("cannot create {}: {e}", dir.display())))?;
     }
     let interrupt = Arc::new(AtomicBool::new(false));
     {
