@@ -43,6 +43,20 @@ pub struct RotorSpec {
     /// Spin rate: absolute for `held`, relative to the carrier for `free`.
     pub spin_rpm: f64,
     pub spin: SpinMode,
+    /// A spin motor (`held` rotors only): the spin is then a state that relaxes to `spin_rpm`.
+    #[serde(default)]
+    pub motor: Option<MotorSpec>,
+}
+
+/// The rotor's motor as a first-order lag: dΩ/dt = (Ω_rated − Ω)/τ (an induction motor whose
+/// torque falls linearly to zero at the rated speed, against the rotor's polar inertia).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotorSpec {
+    /// τ: the time constant of the spin-up, s.
+    pub spin_up_time_constant_s: f64,
+    /// Spin when the run starts (the rated spin is the rotor's `spin_rpm`).
+    pub initial_spin_rpm: f64,
 }
 
 /// What the viewer draws for a body (sizes in metres).
@@ -236,6 +250,15 @@ pub struct Rotor {
     pub polar_inertia_kg_m2: f64,
     pub spin_rad_per_s: f64,
     pub mode: SpinMode,
+    pub motor: Option<Motor>,
+}
+
+/// A spin motor: the absolute spin Ω is a state with dΩ/dt = (Ω_rated − Ω)/τ, Ω_rated being the
+/// rotor's `spin_rad_per_s`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motor {
+    pub time_constant_s: f64,
+    pub initial_spin_rad_per_s: f64,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -757,11 +780,47 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
                         ),
                     ));
                 }
+                let motor = match &r.motor {
+                    None => None,
+                    Some(m) => {
+                        if r.spin != SpinMode::Held {
+                            return Err(err(
+                                a,
+                                "motor",
+                                path("rotor.motor"),
+                                "a spin motor drives a `held` rotor (contradictory options: a free rotor has no torque about its axis)".into(),
+                            ));
+                        }
+                        let tau = m.spin_up_time_constant_s;
+                        if !(tau > 0.0 && tau.is_finite()) {
+                            return Err(err(
+                                a,
+                                "spin_up_time_constant_s",
+                                path("rotor.motor.spin_up_time_constant_s"),
+                                format!("{tau} is out of range (allowed: > 0 s)"),
+                            ));
+                        }
+                        if !m.initial_spin_rpm.is_finite() {
+                            return Err(err(
+                                a,
+                                "initial_spin_rpm",
+                                path("rotor.motor.initial_spin_rpm"),
+                                "must be finite".into(),
+                            ));
+                        }
+                        Some(Motor {
+                            time_constant_s: tau,
+                            initial_spin_rad_per_s: m.initial_spin_rpm
+                                * crate::constants::RPM_IN_RAD_PER_S,
+                        })
+                    }
+                };
                 Some(Rotor {
                     axis: [r.axis[0] / n, r.axis[1] / n, r.axis[2] / n],
                     polar_inertia_kg_m2: r.polar_inertia_kg_m2,
                     spin_rad_per_s: r.spin_rpm * crate::constants::RPM_IN_RAD_PER_S,
                     mode: r.spin,
+                    motor,
                 })
             }
         };

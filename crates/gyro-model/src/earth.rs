@@ -181,10 +181,40 @@ pub fn apparent_gravity<S: ShipMotion>(
     if !(fx.ship_acceleration || fx.base_coriolis || fx.roll_pitch) {
         return g;
     }
+    let mut a = [0.0; 3];
+    if fx.ship_acceleration || fx.base_coriolis {
+        accelerate_with_the_track(motion, fx, t, &mut a);
+    }
+    if fx.roll_pitch {
+        // The pivot swings about the roll centre: second time derivative of R_ship·pivot.
+        let t2: Jet<Jet<f64, 1>, 1> = Jet {
+            v: Jet::variable(t, 0),
+            d: [Jet::constant(1.0)],
+        };
+        let k2 = motion.kinematics(t2);
+        let r = world_from_ship(&k2, fx);
+        let p = r.mul_v(&V3::from_f64(pivot_m));
+        for i in 0..3 {
+            a[i] += p.0[i].d[0].d[0];
+        }
+    }
+    for i in 0..3 {
+        g[i] -= a[i];
+    }
+    g
+}
+
+/// The pivot's acceleration from the ship's track over the sphere (speed changes, turns and the
+/// turning of the local frame) and the Coriolis acceleration of the Earth's rotation.
+fn accelerate_with_the_track<S: ShipMotion>(
+    motion: &S,
+    fx: &BaseEffects,
+    t: f64,
+    a: &mut [f64; 3],
+) {
     let tj = Jet::<f64, 1>::variable(t, 0);
     let k = motion.kinematics(tj);
     let (vn, vw) = velocity_nw(&k);
-    let mut a = [0.0; 3];
     if fx.ship_acceleration {
         // d/dt of the velocity components plus the turning of the local frame (transport rate).
         let (sl, cl) = k.latitude_rad.v.sin_cos();
@@ -205,23 +235,6 @@ pub fn apparent_gravity<S: ShipMotion>(
             a[i] += 2.0 * c[i];
         }
     }
-    if fx.roll_pitch {
-        // The pivot swings about the roll centre: second time derivative of R_ship·pivot.
-        let t2: Jet<Jet<f64, 1>, 1> = Jet {
-            v: Jet::variable(t, 0),
-            d: [Jet::constant(1.0)],
-        };
-        let k2 = motion.kinematics(t2);
-        let r = world_from_ship(&k2, fx);
-        let p = r.mul_v(&V3::from_f64(pivot_m));
-        for i in 0..3 {
-            a[i] += p.0[i].d[0].d[0];
-        }
-    }
-    for i in 0..3 {
-        g[i] -= a[i];
-    }
-    g
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

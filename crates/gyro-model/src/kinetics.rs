@@ -367,6 +367,7 @@ fn inertia_mul<S: Real>(mp: &MassProps, x: &V3<S>) -> V3<S> {
 pub fn evaluate<T: Real, const N: usize>(
     kin: &Kinetics,
     inp: &EvalInput<T>,
+    spins: &[(usize, T, T)],
     m_out: &mut [[T; N]; N],
     k_out: &mut [[T; N]; N],
     c_out: &mut [T; N],
@@ -533,14 +534,28 @@ pub fn evaluate<T: Real, const N: usize>(
             continue;
         };
         let m = mp.m;
-        let mut hv = [0.0; 3];
+        // Rotors' momenta along their axes: held (a number), or a motor's state H = CΩ with
+        // its rate Ḣ (whose reaction on the case is −Ḣ ŝ: the ∂ₜb term below).
+        let mut hv = [T::zero(); 3];
+        let mut hv_dot = [T::zero(); 3];
         for &(bi, ax) in &fr.rotors {
-            let h = inp.spin_momentum[bi];
-            for k in 0..3 {
-                hv[k] += ax[k] * h;
+            match spins.iter().find(|s| s.0 == bi) {
+                Some(&(_, h, h_dot)) => {
+                    for k in 0..3 {
+                        hv[k] += h * ax[k];
+                        hv_dot[k] += h_dot * ax[k];
+                    }
+                }
+                None => {
+                    let h = inp.spin_momentum[bi];
+                    for k in 0..3 {
+                        hv[k] += T::cst(ax[k] * h);
+                    }
+                }
             }
         }
-        let has_spin = hv != [0.0; 3];
+        let has_spin = hv.iter().any(|x| *x != T::zero());
+        let spin_rate = hv_dot.iter().any(|x| *x != T::zero());
         // The centre of gravity from the pivot: a constant in frame axes when the frame turns
         // about the pivot (then every product with it is a product with plain numbers).
         let cgp = if fr.at_pivot {
@@ -579,7 +594,7 @@ pub fn evaluate<T: Real, const N: usize>(
         let mut h0 = iw0;
         if has_spin {
             for k in 0..3 {
-                h0.0[k] = h0.0[k] + hv[k];
+                h0.0[k].v += hv[k];
             }
         }
         // c × X = −(X × c)
@@ -617,11 +632,15 @@ pub fn evaluate<T: Real, const N: usize>(
                 }
                 bt[i] += x;
             }
+            if spin_rate {
+                bt[i] += re(&st.jw[i]).dot(&V3(hv_dot));
+            }
         }
         t2 += (v_u.dot(&v_u) * m + w_u.dot(&h_u)) * 0.5;
         let mut t0_body = (v0.dot(&v0) * m + st.w0.dot(&iw0)) * 0.5;
         if has_spin {
-            t0_body += st.w0.0[0] * hv[0] + st.w0.0[1] * hv[1] + st.w0.0[2] * hv[2];
+            t0_body +=
+                scale(st.w0.0[0], hv[0]) + scale(st.w0.0[1], hv[1]) + scale(st.w0.0[2], hv[2]);
         }
         t0 += t0_body;
         if fr.at_pivot {

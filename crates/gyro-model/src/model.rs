@@ -74,7 +74,7 @@ impl fmt::Display for Fidelity {
 }
 
 /// Every effect a scene can call for, by the name used in scene files and recordings.
-pub const EFFECT_NAMES: [&str; 8] = [
+pub const EFFECT_NAMES: [&str; 9] = [
     "earth_rotation",
     "transport_rate",
     "ship_acceleration",
@@ -83,6 +83,7 @@ pub const EFFECT_NAMES: [&str; 8] = [
     "base_coriolis",
     "damper",
     "friction",
+    "spin_motor",
 ];
 
 /// The effects compiled into a model. Absent effects are never evaluated.
@@ -93,6 +94,9 @@ pub struct Effects {
     pub damper: bool,
     /// Viscous friction elements of the design.
     pub friction: bool,
+    /// Spin motors of the design's rotors (their spin becomes a state); without it, or without
+    /// a motor in the design, every rotor's spin is held at its rated value.
+    pub spin_motor: bool,
 }
 
 impl Effects {
@@ -108,6 +112,7 @@ impl Effects {
             },
             damper: true,
             friction: true,
+            spin_motor: true,
         }
     }
     pub fn get(&self, name: &str) -> Option<bool> {
@@ -121,6 +126,7 @@ impl Effects {
             "base_coriolis" => b.base_coriolis,
             "damper" => self.damper,
             "friction" => self.friction,
+            "spin_motor" => self.spin_motor,
             _ => return None,
         })
     }
@@ -135,6 +141,7 @@ impl Effects {
             "base_coriolis" => b.base_coriolis = on,
             "damper" => self.damper = on,
             "friction" => self.friction = on,
+            "spin_motor" => self.spin_motor = on,
             _ => {
                 return Err(format!(
                     "unknown effect `{name}` (allowed: {})",
@@ -230,6 +237,19 @@ struct StationaryBase {
     g: [f64; 3],
 }
 
+/// A rotor whose spin is a state: dΩ/dt = (Ω_rated − Ω)/τ, H = C·Ω.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpinMotor {
+    pub body: usize,
+    pub polar_inertia_kg_m2: f64,
+    pub rated_spin_rad_per_s: f64,
+    pub time_constant_s: f64,
+    pub initial_spin_rad_per_s: f64,
+}
+
+/// Most spin motors a model compiles (their states live in fixed arrays per evaluation).
+pub const MAX_MOTORS: usize = 4;
+
 /// A design compiled for a scene: immutable; evaluate it with any state.
 #[derive(Clone, Debug)]
 pub struct CompiledModel<M: ShipMotion> {
@@ -254,6 +274,8 @@ pub struct CompiledModel<M: ShipMotion> {
     kinetics: Kinetics,
     /// No servo relation: the reduced equations are the chain's own.
     no_servo: bool,
+    /// Spin motors compiled in: their spins are the last states of every layout.
+    pub motors: Vec<SpinMotor>,
     pub spin_momentum: Vec<f64>,
     stationary: Option<StationaryBase>,
     /// `linear` fidelity: A (dim×dim) about x_eq.
@@ -270,7 +292,36 @@ impl<M: ShipMotion> CompiledModel<M> {
         if n > MAX_COORDINATES {
             return Err(ModelError::TooManyCoordinates(n));
         }
-        let effects = opts.effects;
+        let mut effects = opts.effects;
+        let motors: Vec<SpinMotor> = if effects.spin_motor {
+            design
+                .bodies
+                .iter()
+                .enumerate()
+                .filter_map(|(bi, b)| {
+                    let r = b.rotor.as_ref()?;
+                    let m = r.motor?;
+                    Some(SpinMotor {
+                        body: bi,
+                        polar_inertia_kg_m2: r.polar_inertia_kg_m2,
+                        rated_spin_rad_per_s: r.spin_rad_per_s,
+                        time_constant_s: m.time_constant_s,
+                        initial_spin_rad_per_s: m.initial_spin_rad_per_s,
+                    })
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        if motors.len() > MAX_MOTORS {
+            return Err(ModelError::Invalid(format!(
+                "the design has {} spin motors; at most {MAX_MOTORS} are supported",
+                motors.len()
+            )));
+        }
+        // Reported effects are what is compiled: no motor state without a motor.
+        effects.spin_motor = !motors.is_empty();
+        let nm = motors.len();
         let chain = Chain::from_design(&design, |f| effects.include_force(f));
         let kinetics = Kinetics::from_design(&design, |f| effects.include_force(f));
         let independent: Vec<usize> = (0..n)
@@ -331,6 +382,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             drop_full: Vec::new(),
             kinetics,
             no_servo: ni == n,
+            motors,
             spin_momentum,
             stationary,
             linear_a: Vec::new(),
@@ -338,7 +390,11 @@ impl<M: ShipMotion> CompiledModel<M> {
             x0: Vec::new(),
         };
         // Initial state in the full layout.
-        let mut x = vec![0.0; 2 * ni];
+        // Full layout [q; q̇; Ω of each motor]: the equilibrium is the one at rated spin.
+        let mut x = vec![0.0; 2 * ni + nm];
+        for (k, m) in model.motors.iter().enumerate() {
+            x[2 * ni + k] = m.rated_spin_rad_per_s;
+        }
         model.update_free_rotors(&x);
         if opts.initial.from_equilibrium {
             let q = model.equilibrium(&x[..ni])?;
@@ -346,6 +402,9 @@ impl<M: ShipMotion> CompiledModel<M> {
             model.update_free_rotors(&x);
         }
         model.x_equilibrium = x.clone();
+        for (k, m) in model.motors.iter().enumerate() {
+            x[2 * ni + k] = m.initial_spin_rad_per_s;
+        }
         for &(i, off) in &opts.initial.offsets_rad {
             let col = model
                 .independent
@@ -388,6 +447,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                     xg.push(x[ni + col]);
                 }
             }
+            xg.extend_from_slice(&x[2 * ni..]);
             let dim_g = xg.len();
             let mut dx = vec![0.0; dim_g];
             if model.rhs_generic(Fidelity::Gyroscopic, 0.0, &xg, &mut dx) {
@@ -414,6 +474,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                             x0.push(x[ni + col]);
                         }
                     }
+                    x0.extend_from_slice(&x[2 * ni..]);
                     model.x0 = x0;
                     // Check the precessional block is solvable now rather than mid-run.
                     let mut dx = vec![0.0; model.dim()];
@@ -424,7 +485,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             }
             Fidelity::Linear => {
                 let xe = model.x_equilibrium.clone();
-                let dim = 2 * ni;
+                let dim = 2 * ni + nm;
                 let mut a = vec![0.0; dim * dim];
                 model.jacobian_at(Fidelity::Full, 0.0, &xe, &mut a);
                 model.linear_a = a;
@@ -436,9 +497,10 @@ impl<M: ShipMotion> CompiledModel<M> {
 
     pub fn dim(&self) -> usize {
         let ni = self.independent.len();
+        let nm = self.motors.len();
         match self.fidelity {
-            Fidelity::Gyroscopic => ni + self.precessional.iter().filter(|p| !**p).count(),
-            _ => 2 * ni,
+            Fidelity::Gyroscopic => ni + self.precessional.iter().filter(|p| !**p).count() + nm,
+            _ => 2 * ni + nm,
         }
     }
 
@@ -453,6 +515,9 @@ impl<M: ShipMotion> CompiledModel<M> {
             if self.fidelity != Fidelity::Gyroscopic || !self.precessional[col] {
                 v.push(format!("{}_rate", self.design.coordinates[i].name));
             }
+        }
+        for m in &self.motors {
+            v.push(format!("{}_spin", self.design.bodies[m.body].name));
         }
         v
     }
@@ -526,8 +591,8 @@ impl<M: ShipMotion> CompiledModel<M> {
         jac: &mut [f64],
     ) {
         let dim = self.dim_at(fidelity);
-        let mut xj = [Jet::<f64, D>::constant(0.0); 2 * MAX_COORDINATES];
-        let mut dxj = [Jet::<f64, D>::constant(0.0); 2 * MAX_COORDINATES];
+        let mut xj = [Jet::<f64, D>::constant(0.0); 2 * MAX_COORDINATES + MAX_MOTORS];
+        let mut dxj = [Jet::<f64, D>::constant(0.0); 2 * MAX_COORDINATES + MAX_MOTORS];
         let mut first = 0;
         while first < dim {
             for i in 0..dim {
@@ -549,10 +614,11 @@ impl<M: ShipMotion> CompiledModel<M> {
 
     fn dim_at(&self, fidelity: Fidelity) -> usize {
         let ni = self.independent.len();
+        let nm = self.motors.len();
         if fidelity == Fidelity::Gyroscopic {
-            ni + self.inertial_rows.len()
+            ni + self.inertial_rows.len() + nm
         } else {
-            2 * ni
+            2 * ni + nm
         }
     }
 
@@ -795,6 +861,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         q_ind: &[T],
         qd_ind: &[T],
         u_ind: &[T],
+        spins: &[(usize, T, T)],
         m_red: &mut [[T; N]; N],
         k_red: &mut [[T; N]; N],
         c_red: &mut [T; N],
@@ -818,7 +885,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                 base_rate: &w,
                 gravity: g,
             };
-            kinetics::evaluate::<T, N>(&self.kinetics, &inp, m_red, k_red, c_red);
+            kinetics::evaluate::<T, N>(&self.kinetics, &inp, spins, m_red, k_red, c_red);
             return;
         }
         let mut q = [T::zero(); N];
@@ -840,7 +907,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         let mut m = [[T::zero(); N]; N];
         let mut k = [[T::zero(); N]; N];
         let mut c = [T::zero(); N];
-        kinetics::evaluate::<T, N>(&self.kinetics, &inp, &mut m, &mut k, &mut c);
+        kinetics::evaluate::<T, N>(&self.kinetics, &inp, spins, &mut m, &mut k, &mut c);
         let s = &self.servo_s;
         for (ri, &i) in self.independent.iter().enumerate() {
             c_red[ri] = c[i];
@@ -872,6 +939,21 @@ impl<M: ShipMotion> CompiledModel<M> {
         let mut k = [[T::zero(); N]; N];
         let mut c = [T::zero(); N];
         let q = &x[..ni];
+        // Spin motors: the last states; H = CΩ and its rate enter the chain's equations.
+        let n_motors = self.motors.len();
+        let mech = x.len() - n_motors;
+        let mut spin_states = [(0usize, T::zero(), T::zero()); MAX_MOTORS];
+        for (j, mo) in self.motors.iter().enumerate() {
+            let w = x[mech + j];
+            let w_dot = (T::cst(mo.rated_spin_rad_per_s) - w) / mo.time_constant_s;
+            spin_states[j] = (
+                mo.body,
+                w * mo.polar_inertia_kg_m2,
+                w_dot * mo.polar_inertia_kg_m2,
+            );
+            dx[mech + j] = w_dot;
+        }
+        let spins = &spin_states[..n_motors];
         match fidelity {
             Fidelity::Gyroscopic => {
                 let gi = &self.precessional_rows;
@@ -880,7 +962,17 @@ impl<M: ShipMotion> CompiledModel<M> {
                 for (a, &col) in mis.iter().enumerate() {
                     qd[col] = x[ni + a];
                 }
-                self.reduced_n::<T, N>(true, t, q, &qd[..ni], &qd[..ni], &mut m, &mut k, &mut c);
+                self.reduced_n::<T, N>(
+                    true,
+                    t,
+                    q,
+                    &qd[..ni],
+                    &qd[..ni],
+                    spins,
+                    &mut m,
+                    &mut k,
+                    &mut c,
+                );
                 // Precession equations: K_gg q̇_g = −(c_g + K_gm q̇_m).
                 let ng = gi.len();
                 let mut a = [[T::zero(); N]; N];
@@ -925,7 +1017,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             }
             _ => {
                 let qd = &x[ni..2 * ni];
-                self.reduced_n::<T, N>(false, t, q, qd, qd, &mut m, &mut k, &mut c);
+                self.reduced_n::<T, N>(false, t, q, qd, qd, spins, &mut m, &mut k, &mut c);
                 let mut r = [T::zero(); N];
                 for i in 0..ni {
                     let mut s = c[i];
@@ -966,6 +1058,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             q,
             &zero[..ni],
             &zero[..ni],
+            &[],
             &mut m,
             &mut k,
             &mut c,
@@ -1010,6 +1103,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                 &qj[..ni],
                 &zj[..ni],
                 &zj[..ni],
+                &[],
                 &mut m,
                 &mut k,
                 &mut c,

@@ -106,15 +106,35 @@ fn bench_day(c: &mut Criterion) {
 /// The counters run is not cheap (a full-fidelity rolling day takes seconds): skip it for cases
 /// a command-line filter excludes (criterion's own filter applies to the timed part only).
 fn criterion_filter_matches(id: &str) -> bool {
+    // Criterion's options that take a value; the first other bare word is the filter.
+    const WITH_VALUE: [&str; 12] = [
+        "--warm-up-time",
+        "--measurement-time",
+        "--sample-size",
+        "--save-baseline",
+        "--baseline",
+        "--load-baseline",
+        "--profile-time",
+        "--nresamples",
+        "--noise-threshold",
+        "--confidence-level",
+        "--significance-level",
+        "--color",
+    ];
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let filters: Vec<&String> = args
-        .iter()
-        .filter(|a| !a.starts_with('-'))
-        .collect::<Vec<_>>();
-    filters.is_empty()
-        || filters
-            .iter()
-            .any(|f| format!("day/{id}").contains(f.as_str()))
+    let mut skip = false;
+    let mut filter = None;
+    for a in &args {
+        if skip {
+            skip = false;
+        } else if WITH_VALUE.contains(&a.as_str()) {
+            skip = true;
+        } else if !a.starts_with('-') {
+            filter = Some(a.clone());
+            break;
+        }
+    }
+    filter.is_none_or(|f| format!("day/{id}").contains(&f))
 }
 
 criterion_group!(benches, bench_day);

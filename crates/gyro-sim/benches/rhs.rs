@@ -26,6 +26,7 @@ fn bench_rhs(c: &mut Criterion) {
         ("foucault-azimuth-45n", "foucault"),
         ("harbour-50n", "anschutz-1906"),
         ("run-north-30kn", "anschutz-1906-under-way"),
+        ("rolling-intercardinal", "anschutz-1906-rolling"),
     ] {
         for fidelity in [Fidelity::Full, Fidelity::Gyroscopic, Fidelity::Linear] {
             let Some(sc) = scene(scene_name, fidelity) else {

@@ -680,6 +680,16 @@ impl Scene {
             .map(|(k, v)| (k.clone(), v.clone()))
             .collect();
         let design = Design::from_toml(&design_label, &design_text, &overrides)?;
+        // Spin-motor dynamics: compiled when the design has a motor and the scene does not
+        // disable it (with `effects = "all"` it is asked for; a motorless design compiles none).
+        if !force_all {
+            let has_motor = design
+                .bodies
+                .iter()
+                .any(|b| b.rotor.as_ref().is_some_and(|r| r.motor.is_some()));
+            effects.spin_motor =
+                has_motor && !sim.disable_effects.iter().any(|e| e == "spin_motor");
+        }
         // Initial condition.
         let mut offsets = Vec::new();
         for (role, deg, key) in [
