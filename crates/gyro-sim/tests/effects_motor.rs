@@ -230,15 +230,13 @@ fn motor_options_are_checked() {
         "spin_rpm = 20000.0, spin = \"free\", motor = { spin_up_time_constant_s = 300.0, initial_spin_rpm = 0.0 } }",
     );
     let e = gyro_model::Design::from_toml("free-motor.toml", &free, &[])
-        .err()
-        .expect("a motor on a free rotor is refused");
+        .expect_err("a motor on a free rotor is refused");
     assert!(e.to_string().contains("rotor.motor"), "{e}");
     let negative = text.replace(
         HELD_ROTOR,
         "spin_rpm = 20000.0, spin = \"held\", motor = { spin_up_time_constant_s = -1.0, initial_spin_rpm = 0.0 } }",
     );
     let e = gyro_model::Design::from_toml("negative-tau.toml", &negative, &[])
-        .err()
-        .expect("a negative time constant is refused");
+        .expect_err("a negative time constant is refused");
     assert!(e.to_string().contains("spin_up_time_constant_s"), "{e}");
 }
