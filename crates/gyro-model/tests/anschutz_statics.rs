@@ -50,7 +50,7 @@ fn print_equilibrium_and_modes() {
             kappa: d.parameter("kappa_n_m").expect("present"),
             inertia_vertical: 0.05,
             inertia_east_west: 0.05,
-            latitude_rad: (lat as f64).to_radians(),
+            latitude_rad: lat.to_radians(),
         };
         let mut modes = m.modes();
         modes.sort_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
