@@ -133,6 +133,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         summary.bytes as f64 / messages
     );
 
+    if std::env::var_os("GYRO_MCAP_BENCH_WRITE_ONLY").is_some() {
+        std::fs::remove_file(&path)?;
+        return Ok(());
+    }
+
     let started = Instant::now();
     let cpu0 = cpu_s();
     let rec = Recording::open(&path)?;

@@ -233,13 +233,8 @@ impl Tag {
     }
 }
 
-#[inline]
-fn put_f64_field(buf: &mut Vec<u8>, tag: u8, v: f64) {
-    buf.push(tag);
-    buf.extend_from_slice(&v.to_le_bytes());
-}
-
 /// The encoded length of a FrameTransform message (for the record length field).
+#[inline]
 pub(crate) fn pose_encoded_len(log_time_ns: u64, pose: &Pose) -> usize {
     let ts = timestamp_len(log_time_ns);
     let p = pose.parent_frame.len();
@@ -251,38 +246,77 @@ pub(crate) fn pose_encoded_len(log_time_ns: u64, pose: &Pose) -> usize {
         + (2 + 36)
 }
 
+#[inline]
 fn timestamp_len(log_time_ns: u64) -> usize {
     let (s, n) = split_ns(log_time_ns);
     1 + varint_len(s) + 1 + varint_len(n)
 }
 
+#[inline]
 fn split_ns(t: u64) -> (u64, u64) {
     (t / 1_000_000_000, t % 1_000_000_000)
 }
 
-/// Appends `foxglove.FrameTransform` with every field written (zeros too).
-pub(crate) fn encode_pose(buf: &mut Vec<u8>, log_time_ns: u64, pose: &Pose) {
+/// Sequential writes into a slice sized beforehand (no capacity checks per byte).
+struct Cursor<'a> {
+    out: &'a mut [u8],
+    at: usize,
+}
+
+impl Cursor<'_> {
+    #[inline]
+    fn byte(&mut self, b: u8) {
+        self.out[self.at] = b;
+        self.at += 1;
+    }
+    #[inline]
+    fn bytes(&mut self, b: &[u8]) {
+        self.out[self.at..self.at + b.len()].copy_from_slice(b);
+        self.at += b.len();
+    }
+    #[inline]
+    fn varint(&mut self, mut v: u64) {
+        while v >= 0x80 {
+            self.byte((v as u8) | 0x80);
+            v >>= 7;
+        }
+        self.byte(v as u8);
+    }
+    /// A Vector3 or Quaternion: every component written (zeros too), fields 1.. in order.
+    #[inline]
+    fn doubles<const N: usize>(&mut self, tag: u8, v: &[f64; N]) {
+        let mut b = [0u8; 38];
+        b[0] = tag;
+        b[1] = (9 * N) as u8;
+        for (i, x) in v.iter().enumerate() {
+            b[2 + 9 * i] = (((i + 1) << 3) | 1) as u8;
+            b[3 + 9 * i..11 + 9 * i].copy_from_slice(&x.to_le_bytes());
+        }
+        self.bytes(&b[..2 + 9 * N]);
+    }
+}
+
+/// Encodes `foxglove.FrameTransform` into `out`, which is exactly [`pose_encoded_len`] bytes
+/// long, with every field written (zeros too: dense, and so regular that zstd compresses it
+/// faster and smaller than proto3's zero-less form).
+pub(crate) fn encode_pose(out: &mut [u8], log_time_ns: u64, pose: &Pose) {
     let (s, n) = split_ns(log_time_ns);
-    buf.push(0x0A); // 1: timestamp
-    put_varint(buf, timestamp_len(log_time_ns) as u64);
-    buf.push(0x08);
-    put_varint(buf, s);
-    buf.push(0x10);
-    put_varint(buf, n);
-    buf.push(0x12); // 2: parent_frame_id
-    put_varint(buf, pose.parent_frame.len() as u64);
-    buf.extend_from_slice(pose.parent_frame.as_bytes());
-    buf.push(0x1A); // 3: child_frame_id
-    put_varint(buf, pose.child_frame.len() as u64);
-    buf.extend_from_slice(pose.child_frame.as_bytes());
-    buf.extend_from_slice(&[0x22, 27]); // 4: translation
-    for (i, v) in pose.translation_m.iter().enumerate() {
-        put_f64_field(buf, (((i + 1) << 3) | 1) as u8, *v);
-    }
-    buf.extend_from_slice(&[0x2A, 36]); // 5: rotation
-    for (i, v) in pose.rotation_xyzw.iter().enumerate() {
-        put_f64_field(buf, (((i + 1) << 3) | 1) as u8, *v);
-    }
+    let mut c = Cursor { out, at: 0 };
+    c.byte(0x0A); // 1: timestamp
+    c.varint(timestamp_len(log_time_ns) as u64);
+    c.byte(0x08);
+    c.varint(s);
+    c.byte(0x10);
+    c.varint(n);
+    c.byte(0x12); // 2: parent_frame_id
+    c.varint(pose.parent_frame.len() as u64);
+    c.bytes(pose.parent_frame.as_bytes());
+    c.byte(0x1A); // 3: child_frame_id
+    c.varint(pose.child_frame.len() as u64);
+    c.bytes(pose.child_frame.as_bytes());
+    c.doubles(0x22, &pose.translation_m); // 4: translation
+    c.doubles(0x2A, &pose.rotation_xyzw); // 5: rotation
+    debug_assert_eq!(c.at, c.out.len(), "pose_encoded_len and encode_pose agree");
 }
 
 #[cfg(test)]
@@ -300,16 +334,32 @@ mod tests {
 
     #[test]
     fn pose_len_matches_encoding() {
-        let pose = Pose {
+        let mut pose = Pose {
             parent_frame: "earth".into(),
-            child_frame: "ship".into(),
+            child_frame: "ship".repeat(40),
             translation_m: [1.0, 2.0, 3.0],
             rotation_xyzw: [0.0, 0.0, 0.0, 1.0],
         };
-        for t in [0, 5, 1_000_000_000, u64::MAX] {
-            let mut b = Vec::new();
-            encode_pose(&mut b, t, &pose);
-            assert_eq!(b.len(), pose_encoded_len(t, &pose));
+        for (tr, rot) in [
+            ([1.0, 2.0, 3.0], [0.0, 0.0, 0.0, 1.0]),
+            ([0.0; 3], [0.0; 4]),
+            ([-0.0, f64::NAN, 0.0], [0.5, -0.5, 0.5, -0.5]),
+        ] {
+            pose.translation_m = tr;
+            pose.rotation_xyzw = rot;
+            for t in [0, 5, 999_999_999, 1_000_000_000, u64::MAX] {
+                // Too short a buffer panics; too long leaves a zero byte that fails to decode.
+                let mut b = vec![0u8; pose_encoded_len(t, &pose)];
+                encode_pose(&mut b, t, &pose);
+                let d = crate::decode::decode_pose(&b).expect("decodes");
+                assert_eq!(d.child, pose.child_frame.as_bytes());
+                for (a, b) in d.translation.iter().zip(&pose.translation_m) {
+                    assert_eq!(a.to_bits(), b.to_bits());
+                }
+                for (a, b) in d.rotation.iter().zip(&pose.rotation_xyzw) {
+                    assert_eq!(a.to_bits(), b.to_bits());
+                }
+            }
         }
     }
 

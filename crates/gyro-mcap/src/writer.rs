@@ -83,8 +83,9 @@ struct SinkChannel {
     topic: String,
     sequence: u32,
     message_count: u64,
-    /// (log_time, offset in the chunk's records) of this chunk's messages.
-    chunk_index: Vec<(u64, u64)>,
+    /// (log_time, offset in the chunk's records) of this chunk's messages, as the message index
+    /// record stores them (16 little-endian bytes each).
+    chunk_index: Vec<u8>,
 }
 
 /// A closed chunk on its way to the file: its records, time range and message indexes, and
@@ -655,7 +656,10 @@ impl Sink {
         if ch.chunk_index.is_empty() {
             self.touched.push(slot);
         }
-        ch.chunk_index.push((log_time, offset));
+        let mut entry = [0u8; 16];
+        entry[..8].copy_from_slice(&log_time.to_le_bytes());
+        entry[8..].copy_from_slice(&offset.to_le_bytes());
+        ch.chunk_index.extend_from_slice(&entry);
         let seq = sequence.unwrap_or(ch.sequence);
         ch.sequence = seq.wrapping_add(1);
         ch.message_count += 1;
@@ -701,13 +705,10 @@ impl Sink {
             job.index_offsets.push((ch.id, job.indexes.len() as u64));
             let b = &mut job.indexes;
             b.push(op::MESSAGE_INDEX);
-            put_u64(b, (2 + 4 + 16 * ch.chunk_index.len()) as u64);
+            put_u64(b, (2 + 4 + ch.chunk_index.len()) as u64);
             put_u16(b, ch.id);
-            put_u32(b, len32(16 * ch.chunk_index.len()));
-            for &(t, o) in &ch.chunk_index {
-                put_u64(b, t);
-                put_u64(b, o);
-            }
+            put_u32(b, len32(ch.chunk_index.len()));
+            b.extend_from_slice(&ch.chunk_index);
             ch.chunk_index.clear();
         }
         self.touched.clear();
@@ -874,10 +875,18 @@ enum ChannelKind {
     Record {
         kinds: Vec<FieldKind>,
         tags: Vec<Tag>,
-        /// Encoded length when every field is F64 (the fast path), else None.
-        all_f64_len: Option<usize>,
+        /// When every field is F64 (the fast path): the encoded message with every value 0.0,
+        /// and where each value's 8 bytes go in it. Else None.
+        all_f64: Option<F64Template>,
     },
     Pose,
+}
+
+/// A record of F64 fields only, encoded once with zeros: a message is this copy with its values
+/// patched in.
+struct F64Template {
+    bytes: Vec<u8>,
+    value_at: Vec<usize>,
 }
 
 /// Writes one recording: `<final_path>.partial` while running, renamed to `final_path` by
@@ -971,14 +980,20 @@ impl RecordingWriter {
                 Tag::new(i as u32 + 1, wire)
             })
             .collect::<Vec<_>>();
-        let all_f64_len = kinds
-            .iter()
-            .all(|k| *k == FieldKind::F64)
-            .then(|| tags.iter().map(|t| t.len() + 8).sum());
+        let all_f64 = kinds.iter().all(|k| *k == FieldKind::F64).then(|| {
+            let mut bytes = Vec::new();
+            let mut value_at = Vec::new();
+            for t in &tags {
+                bytes.extend_from_slice(t.as_slice());
+                value_at.push(bytes.len());
+                bytes.extend_from_slice(&[0; 8]);
+            }
+            F64Template { bytes, value_at }
+        });
         self.kinds.push(ChannelKind::Record {
             kinds,
             tags,
-            all_f64_len,
+            all_f64,
         });
         Ok(ChannelId(slot as u32))
     }
@@ -1018,20 +1033,20 @@ impl RecordingWriter {
         values: &[f64],
     ) -> Result<(), RecordingError> {
         let slot = ch.0 as usize;
-        let (tags, len) = match self.kinds.get(slot) {
+        let template = match self.kinds.get(slot) {
             Some(ChannelKind::Record {
-                tags,
-                all_f64_len: Some(len),
-                ..
-            }) if tags.len() == values.len() => (tags, *len),
+                all_f64: Some(t), ..
+            }) if t.value_at.len() == values.len() => t,
             _ => return Err(self.f64_misuse(ch, values.len())),
         };
-        let buf = self
-            .sink
-            .begin_message(slot, None, log_time_ns, log_time_ns, len);
-        for (tag, v) in tags.iter().zip(values) {
-            buf.extend_from_slice(tag.as_slice());
-            buf.extend_from_slice(&v.to_le_bytes());
+        let buf =
+            self.sink
+                .begin_message(slot, None, log_time_ns, log_time_ns, template.bytes.len());
+        let start = buf.len();
+        buf.extend_from_slice(&template.bytes);
+        let msg = &mut buf[start..];
+        for (&at, v) in template.value_at.iter().zip(values) {
+            msg[at..at + 8].copy_from_slice(&v.to_le_bytes());
         }
         self.after_message()
     }
@@ -1043,9 +1058,7 @@ impl RecordingWriter {
         match self.kinds.get(ch.0 as usize) {
             None => self.usage(call, "a channel id returned by this writer"),
             Some(ChannelKind::Pose) => self.usage(call, "a record channel, found a pose channel"),
-            Some(ChannelKind::Record {
-                all_f64_len: None, ..
-            }) => self.usage(
+            Some(ChannelKind::Record { all_f64: None, .. }) => self.usage(
                 call,
                 "a channel whose fields are all F64 (use write_record)",
             ),
@@ -1131,7 +1144,9 @@ impl RecordingWriter {
         let buf = self
             .sink
             .begin_message(slot, None, log_time_ns, log_time_ns, len);
-        encode_pose(buf, log_time_ns, pose);
+        let start = buf.len();
+        buf.resize(start + len, 0);
+        encode_pose(&mut buf[start..], log_time_ns, pose);
         self.after_message()
     }
 
