@@ -25,10 +25,12 @@ use crate::schema::{
 pub struct WriterOptions {
     /// Uncompressed bytes of records after which a chunk is closed. Default 1 MiB.
     pub chunk_size_bytes: u64,
-    /// zstd level of chunk compression. Default -1 (zstd's fastest regular strategy with a
-    /// little acceleration): compression is most of the writer's CPU, and on recordings of the
-    /// shipped scenes level -1 compresses 1.34× faster than level 1 for files 3 % larger
-    /// (772 vs 575 MB/s, ratio 4.35 vs 4.48; level 3: 377 MB/s, ratio 4.57).
+    /// zstd level of chunk compression. Default -4 (zstd's fast strategy with acceleration 4):
+    /// compression is most of the writer's CPU. On 24-h 10-Hz recordings of harbour-50n and
+    /// turn-90 (`examples/zstd_levels.rs`), level -4 compresses 1.25× and 1.19× faster than -1
+    /// for chunks 14 % and 8 % larger, files 8 % and 5 % larger (message indexes are stored
+    /// uncompressed); level 1 is 1.2× slower than -1 for about the same size, and -3 is both
+    /// slower and larger than -4 on these.
     pub zstd_level: i32,
     /// Wall-clock seconds after which an open chunk is closed and handed to the operating system,
     /// however small, so a killed process loses at most this much. Default 1.0.
@@ -39,7 +41,7 @@ impl Default for WriterOptions {
     fn default() -> Self {
         Self {
             chunk_size_bytes: 1 << 20,
-            zstd_level: -1,
+            zstd_level: -4,
             flush_interval_s: 1.0,
         }
     }
