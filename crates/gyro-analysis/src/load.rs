@@ -299,8 +299,14 @@ fn pose_frame(recording: &Recording, p: PoseTable, topic: &str, run_id: &str) ->
     let t: Vec<f64> = p.log_time_ns.iter().map(|&ns| ns as f64 * 1e-9).collect();
     let mut columns = vec![
         Float64Chunked::from_vec("time_s".into(), t).into_column(),
-        Column::new("parent_frame".into(), p.parent_frame),
-        Column::new("child_frame".into(), p.child_frame),
+        Column::new(
+            "parent_frame".into(),
+            (0..n).map(|i| p.parent_frame(i)).collect::<Vec<&str>>(),
+        ),
+        Column::new(
+            "child_frame".into(),
+            (0..n).map(|i| p.child_frame(i)).collect::<Vec<&str>>(),
+        ),
     ];
     for (k, name) in ["x_m", "y_m", "z_m"].iter().enumerate() {
         let v: Vec<f64> = p.translation_m.iter().map(|a| a[k]).collect();

@@ -73,12 +73,17 @@ impl RecordTable {
     }
 }
 
-/// A pose channel as columns, rows in log-time order.
+/// A pose channel as columns, rows in log-time order. Frame ids repeat on every row, so each
+/// distinct one is stored once, in `frames`, and rows refer to it by index (no string per row).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct PoseTable {
     pub log_time_ns: Vec<u64>,
-    pub parent_frame: Vec<String>,
-    pub child_frame: Vec<String>,
+    /// The distinct frame ids, in the order they first appear in the file.
+    pub frames: Vec<String>,
+    /// Per row: the parent frame id, as an index into `frames`.
+    pub parent_frame_index: Vec<u32>,
+    /// Per row: the child frame id, as an index into `frames`.
+    pub child_frame_index: Vec<u32>,
     pub translation_m: Vec<[f64; 3]>,
     pub rotation_xyzw: Vec<[f64; 4]>,
 }
@@ -89,6 +94,14 @@ impl PoseTable {
     }
     pub fn is_empty(&self) -> bool {
         self.log_time_ns.is_empty()
+    }
+    /// The parent frame id of row `row` (panics past the end, like indexing).
+    pub fn parent_frame(&self, row: usize) -> &str {
+        &self.frames[self.parent_frame_index[row] as usize]
+    }
+    /// The child frame id of row `row` (panics past the end, like indexing).
+    pub fn child_frame(&self, row: usize) -> &str {
+        &self.frames[self.child_frame_index[row] as usize]
     }
 }
 
@@ -684,30 +697,37 @@ impl Recording {
             .iter()
             .filter(|b| ids.iter().any(|id| b.channels.binary_search(id).is_ok()))
             .collect();
-        let template: Vec<Decoder> = wanted.into_iter().map(|(_, d)| d).collect();
+        // The first run decodes into the decoders as given (sized for every row of their
+        // channel, so the later runs append to them without moving what is there); the others
+        // into decoders sized for their share (chunks hold about equal numbers of messages).
+        let first: Vec<Decoder> = wanted.into_iter().map(|(_, d)| d).collect();
         let threads = reading_threads(blocks.len());
         let per = blocks.len().div_ceil(threads.max(1)).max(1);
         let total_blocks = blocks.len().max(1);
-        let run = |part: &[&Block]| -> Result<Vec<Decoder>, RecordingError> {
-            // Sized for this share of the rows (chunks hold about equal numbers of messages).
-            let mut decoders: Vec<Decoder> = template
-                .iter()
-                .map(|d| d.empty_like(d.capacity() * part.len() / total_blocks + 1024))
-                .collect();
+        let mut runs: Vec<(&[&Block], Vec<Decoder>)> = blocks
+            .chunks(per)
+            .skip(1)
+            .map(|part| {
+                let decoders = first
+                    .iter()
+                    .map(|d| d.empty_like(d.capacity() * part.len() / total_blocks + 1024))
+                    .collect();
+                (part, decoders)
+            })
+            .collect();
+        runs.insert(0, (&blocks[..per.min(blocks.len())], first));
+        let run = |(part, mut decoders): (&[&Block], Vec<Decoder>)| {
             let mut buf = Vec::new();
             for block in part {
                 self.decode_block(block, &slot_of, &topics, &mut decoders, &mut buf)?;
             }
-            Ok(decoders)
+            Ok::<_, RecordingError>(decoders)
         };
-        let parts: Vec<Result<Vec<Decoder>, RecordingError>> = if threads <= 1 {
-            vec![run(&blocks)]
+        let parts: Vec<Result<Vec<Decoder>, RecordingError>> = if runs.len() <= 1 {
+            runs.into_iter().map(run).collect()
         } else {
             std::thread::scope(|s| {
-                let handles: Vec<_> = blocks
-                    .chunks(per)
-                    .map(|part| s.spawn(move || run(part)))
-                    .collect();
+                let handles: Vec<_> = runs.into_iter().map(|r| s.spawn(move || run(r))).collect();
                 handles
                     .into_iter()
                     .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
@@ -718,11 +738,13 @@ impl Recording {
         let mut parts = parts.into_iter();
         let mut out = match parts.next() {
             Some(first) => first?,
-            None => template,
+            None => Vec::new(),
         };
         for part in parts {
-            for (whole, piece) in out.iter_mut().zip(part?) {
-                whole.append(piece);
+            for ((whole, piece), topic) in out.iter_mut().zip(part?).zip(&topics) {
+                whole
+                    .append(piece)
+                    .map_err(|e| self.schema_error(topic, e))?;
             }
         }
         for d in &mut out {
@@ -999,7 +1021,7 @@ impl Decoder {
     }
 
     /// Appends the rows of `other` (a later share of the same channel).
-    fn append(&mut self, other: Decoder) {
+    fn append(&mut self, other: Decoder) -> Result<(), String> {
         match (self, other) {
             (
                 Decoder::Records {
@@ -1018,9 +1040,10 @@ impl Decoder {
                     c.append(o);
                 }
             }
-            (Decoder::Poses(a), Decoder::Poses(b)) => a.append(b),
+            (Decoder::Poses(a), Decoder::Poses(b)) => return a.append(b),
             _ => {}
         }
+        Ok(())
     }
 
     fn sort_by_time(&mut self) {
@@ -1056,41 +1079,59 @@ impl Decoder {
     }
 }
 
-/// Decodes poses; frame ids repeat, so each distinct one is checked as UTF-8 once.
+/// Decodes poses; frame ids repeat, so each distinct one is checked as UTF-8 and stored once.
 struct PoseDecoder {
     table: PoseTable,
-    /// Frame ids seen so far (a design has a handful of bodies).
-    frames: Vec<(Vec<u8>, String)>,
+    /// Frame id → index in `table.frames`, once there are more than a handful (below that, a
+    /// scan of `table.frames` is faster).
+    lookup: HashMap<Vec<u8>, u32>,
 }
 
-/// Distinct frame ids remembered; a channel with more is decoded without the cache.
-const FRAME_CACHE: usize = 64;
+/// Distinct frame ids found by scanning; past this, through the hash map.
+const FRAME_SCAN: usize = 16;
 
 impl PoseDecoder {
     fn with_capacity(n: usize) -> Self {
         Self {
             table: PoseTable {
                 log_time_ns: Vec::with_capacity(n),
-                parent_frame: Vec::with_capacity(n),
-                child_frame: Vec::with_capacity(n),
+                frames: Vec::new(),
+                parent_frame_index: Vec::with_capacity(n),
+                child_frame_index: Vec::with_capacity(n),
                 translation_m: Vec::with_capacity(n),
                 rotation_xyzw: Vec::with_capacity(n),
             },
-            frames: Vec::new(),
+            lookup: HashMap::new(),
         }
     }
 
-    fn frame(&mut self, bytes: &[u8]) -> Result<String, String> {
-        if let Some((_, s)) = self.frames.iter().find(|(b, _)| b == bytes) {
-            return Ok(s.clone());
+    /// The index of frame id `bytes`, added to the frames if new.
+    #[inline]
+    fn frame(&mut self, bytes: &[u8]) -> Result<u32, String> {
+        let frames = &mut self.table.frames;
+        if frames.len() <= FRAME_SCAN {
+            if let Some(i) = frames.iter().position(|f| f.as_bytes() == bytes) {
+                return Ok(i as u32);
+            }
+        } else if let Some(&i) = self.lookup.get(bytes) {
+            return Ok(i);
         }
-        let s = std::str::from_utf8(bytes)
-            .map_err(|_| "frame ids as UTF-8 text".to_owned())?
-            .to_owned();
-        if self.frames.len() < FRAME_CACHE {
-            self.frames.push((bytes.to_vec(), s.clone()));
+        let s = std::str::from_utf8(bytes).map_err(|_| "frame ids as UTF-8 text".to_owned())?;
+        let i = u32::try_from(frames.len()).map_err(|_| "fewer than 2^32 frame ids".to_owned())?;
+        frames.push(s.to_owned());
+        if frames.len() > FRAME_SCAN {
+            if self.lookup.is_empty() {
+                self.lookup.extend(
+                    frames
+                        .iter()
+                        .enumerate()
+                        .map(|(k, f)| (f.as_bytes().to_vec(), k as u32)),
+                );
+            } else {
+                self.lookup.insert(bytes.to_vec(), i);
+            }
         }
-        Ok(s)
+        Ok(i)
     }
 
     #[inline]
@@ -1100,20 +1141,30 @@ impl PoseDecoder {
         let child = self.frame(p.child)?;
         let t = &mut self.table;
         t.log_time_ns.push(log_time);
-        t.parent_frame.push(parent);
-        t.child_frame.push(child);
+        t.parent_frame_index.push(parent);
+        t.child_frame_index.push(child);
         t.translation_m.push(p.translation);
         t.rotation_xyzw.push(p.rotation);
         Ok(())
     }
 
-    fn append(&mut self, mut other: PoseDecoder) {
+    /// Appends the rows of a later share of the same channel, its frame indexes mapped to ours.
+    fn append(&mut self, mut other: PoseDecoder) -> Result<(), String> {
+        let map = other
+            .table
+            .frames
+            .iter()
+            .map(|f| self.frame(f.as_bytes()))
+            .collect::<Result<Vec<u32>, String>>()?;
         let (a, b) = (&mut self.table, &mut other.table);
         a.log_time_ns.append(&mut b.log_time_ns);
-        a.parent_frame.append(&mut b.parent_frame);
-        a.child_frame.append(&mut b.child_frame);
+        a.parent_frame_index
+            .extend(b.parent_frame_index.iter().map(|&i| map[i as usize]));
+        a.child_frame_index
+            .extend(b.child_frame_index.iter().map(|&i| map[i as usize]));
         a.translation_m.append(&mut b.translation_m);
         a.rotation_xyzw.append(&mut b.rotation_xyzw);
+        Ok(())
     }
 
     fn sort_by_time(&mut self) {
@@ -1123,8 +1174,8 @@ impl PoseDecoder {
                 *v = order.iter().map(|&i| v[i].clone()).collect();
             }
             apply(&mut t.log_time_ns, &order);
-            apply(&mut t.parent_frame, &order);
-            apply(&mut t.child_frame, &order);
+            apply(&mut t.parent_frame_index, &order);
+            apply(&mut t.child_frame_index, &order);
             apply(&mut t.translation_m, &order);
             apply(&mut t.rotation_xyzw, &order);
         }

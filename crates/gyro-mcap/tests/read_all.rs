@@ -36,8 +36,8 @@ fn pose_bits(t: &PoseTable) -> (Vec<u64>, Vec<String>, Vec<String>, Vec<u64>) {
         .collect();
     (
         t.log_time_ns.clone(),
-        t.parent_frame.clone(),
-        t.child_frame.clone(),
+        (0..t.len()).map(|i| t.parent_frame(i).to_owned()).collect(),
+        (0..t.len()).map(|i| t.child_frame(i).to_owned()).collect(),
         nums,
     )
 }
@@ -122,4 +122,64 @@ fn a_bad_message_is_reported_at_its_chunk() {
     let e = rec.read_all().unwrap_err().to_string();
     assert!(e.contains(&format!("at byte {start}")), "{e}");
     assert!(e.contains("zstx"), "{e}");
+}
+
+/// Frame ids are stored once per distinct id: with more ids than the decoder scans (so the
+/// hash map takes over), ids that first appear late in the file (in another thread's share of
+/// the chunks, which numbers them differently), non-ASCII ids and rows out of time order, every
+/// row still reads back its own parent and child.
+#[test]
+fn pose_frames_are_stored_once_and_read_back_per_row() {
+    let dir = tmp_dir("pose_frames");
+    let path = dir.join("frames.mcap");
+    let opts = WriterOptions {
+        chunk_size_bytes: 2 * 1024,
+        ..Default::default()
+    };
+    let mut w = gyro_mcap::RecordingWriter::create(&path, opts).unwrap();
+    let ch = w.add_pose_channel("/tf").unwrap();
+    let rows = 4000u64;
+    let name = |k: u64| format!("body-{k}-ü");
+    let mut expected = Vec::new();
+    for i in 0..rows {
+        // Ids 0..8 throughout; ids 8..48 only in the second half of the file.
+        let k = if i < rows / 2 { i % 8 } else { 8 + i % 40 };
+        // Log times shuffled within runs of 16 rows: the reader sorts rows by time.
+        let t = ((i / 16) * 16 + (i * 7) % 16) * 1_000_000;
+        let pose = gyro_mcap::Pose {
+            parent_frame: name(k / 2),
+            child_frame: name(k),
+            translation_m: [i as f64, 0.0, -0.0],
+            rotation_xyzw: [0.0, 0.0, 0.0, 1.0],
+        };
+        w.write_pose(ch, t, &pose).unwrap();
+        expected.push((t, name(k / 2), name(k), i as f64));
+    }
+    w.finish().unwrap();
+    expected.sort_by_key(|e| e.0);
+    let rec = Recording::open(&path).unwrap();
+    assert!(rec.block_count() >= 16, "{} chunks", rec.block_count());
+    for t in [
+        rec.read_poses("/tf").unwrap(),
+        rec.read_all().unwrap()["/tf"].as_poses().unwrap().clone(),
+    ] {
+        assert_eq!(t.len(), rows as usize);
+        let mut sorted = t.frames.clone();
+        sorted.sort();
+        sorted.dedup();
+        assert_eq!(sorted.len(), t.frames.len(), "each id once");
+        assert_eq!(t.frames.len(), 48);
+        assert_eq!(t.frames[0], name(0), "in order of first appearance");
+        let got: Vec<_> = (0..t.len())
+            .map(|r| {
+                (
+                    t.log_time_ns[r],
+                    t.parent_frame(r).to_owned(),
+                    t.child_frame(r).to_owned(),
+                    t.translation_m[r][0],
+                )
+            })
+            .collect();
+        assert_eq!(got, expected);
+    }
 }

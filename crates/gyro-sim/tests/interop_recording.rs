@@ -233,8 +233,8 @@ fn python_mcap_decodes_every_channel_of_a_shipped_scene() {
                 + f["timestamp.nanos"].as_u64().unwrap(),
             t
         );
-        assert_eq!(f["parent_frame_id"], poses.parent_frame[row].as_str());
-        assert_eq!(f["child_frame_id"], poses.child_frame[row].as_str());
+        assert_eq!(f["parent_frame_id"], poses.parent_frame(row));
+        assert_eq!(f["child_frame_id"], poses.child_frame(row));
         for (k, axis) in ["x", "y", "z"].iter().enumerate() {
             assert_eq!(
                 bits(&f[format!("translation.{axis}")]),
@@ -263,10 +263,8 @@ fn python_mcap_decodes_every_channel_of_a_shipped_scene() {
 
 /// The frames of a pose table: child → parent.
 fn frames(p: &PoseTable) -> BTreeMap<String, String> {
-    p.child_frame
-        .iter()
-        .cloned()
-        .zip(p.parent_frame.iter().cloned())
+    (0..p.len())
+        .map(|i| (p.child_frame(i).to_owned(), p.parent_frame(i).to_owned()))
         .collect()
 }
 
@@ -344,7 +342,7 @@ fn rerun_mcap_convert_turns_the_poses_into_transforms_of_every_body() {
         let t = &transforms[child];
         assert_eq!(t["parent_frame"], parent.as_str(), "{child}");
         let rows: Vec<usize> = (0..poses.len())
-            .filter(|&i| &poses.child_frame[i] == child)
+            .filter(|&i| poses.child_frame(i) == child)
             .collect();
         assert_eq!(t["count"], rows.len(), "{child}: one transform per pose");
         // The last pose of the frame, exactly (Rerun keeps f64 translations and quaternions

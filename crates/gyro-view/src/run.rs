@@ -132,12 +132,12 @@ fn tracks(rec: &Recording) -> Result<Vec<(String, Track)>, ViewError> {
     let mut index: BTreeMap<&str, usize> = BTreeMap::new();
     let mut out: Vec<(String, Track)> = Vec::new();
     for i in 0..poses.len() {
-        let child = poses.child_frame[i].as_str();
+        let child = poses.child_frame(i);
         let slot = *index.entry(child).or_insert_with(|| {
             out.push((
                 child.to_owned(),
                 Track {
-                    parent: poses.parent_frame[i].clone(),
+                    parent: poses.parent_frame(i).to_owned(),
                     time_ns: Vec::new(),
                     translation_m: Vec::new(),
                     rotation_xyzw: Vec::new(),

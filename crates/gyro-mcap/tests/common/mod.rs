@@ -329,8 +329,8 @@ pub fn read_back(rec: &Recording) -> BTreeMap<&'static str, Vec<Msg>> {
                 Msg::Pose(
                     p.log_time_ns[r],
                     Pose {
-                        parent_frame: p.parent_frame[r].clone(),
-                        child_frame: p.child_frame[r].clone(),
+                        parent_frame: p.parent_frame(r).to_owned(),
+                        child_frame: p.child_frame(r).to_owned(),
                         translation_m: p.translation_m[r],
                         rotation_xyzw: p.rotation_xyzw[r],
                     },
