@@ -19,6 +19,10 @@ use std::time::Instant;
 /// Program version recorded in every file.
 pub const PROGRAM_VERSION: &str = env!("CARGO_PKG_VERSION");
 
+/// Simulated seconds between two progress reports on `/solver/stats` (the first sample at or
+/// after each multiple of this, before the end, carries one; the end carries the final one).
+pub const SOLVER_STATS_EVERY_S: f64 = 3600.0;
+
 /// Options of a recorded run.
 #[derive(Default)]
 pub struct RecordOptions<'a> {
@@ -330,7 +334,8 @@ pub fn record(
         .collect();
 
     let interrupt = opts.interrupt.clone();
-    let result = sim.run(scene.method, &scene.tolerances, |t, x| {
+    let mut next_stats_s = SOLVER_STATS_EVERY_S;
+    let result = sim.run_with_progress(scene.method, &scene.tolerances, |t, x, probe| {
         let mut step = || -> Result<(), gyro_mcap::RecordingError> {
             while next_event < events.len() && events[next_event].0 <= t + 1e-9 {
                 let vals: Vec<Value> = events[next_event]
@@ -394,6 +399,24 @@ pub fn record(
                     msg.rotation_xyzw = quat_from_matrix(&rel);
                     w.write_pose(tf_ch, ns(t), msg)?;
                 }
+            }
+            if t >= next_stats_s && t < scene.duration_s {
+                // A progress report: the work so far. The integrators count steps only for
+                // their final statistics, so steps and rejected steps are 0 until the end.
+                let p = probe.progress();
+                w.write_record(
+                    stats_ch,
+                    ns(t),
+                    &[
+                        Value::F64(t),
+                        Value::U64(0),
+                        Value::U64(0),
+                        Value::U64(p.rhs_evals),
+                        Value::U64(p.jacobian_evals),
+                        Value::F64(p.wall_time_s),
+                    ],
+                )?;
+                next_stats_s = ((t / SOLVER_STATS_EVERY_S).floor() + 1.0) * SOLVER_STATS_EVERY_S;
             }
             Ok(())
         };

@@ -6,6 +6,7 @@ use crate::program::ShipProgram;
 use crate::scene::Scene;
 use crate::solvers::{self, OdeSystem, OutputGrid, SolveError, SolverStats, StopReason};
 use gyro_model::{CompiledModel, Fidelity, ModelError, ShipMotion};
+use std::cell::Cell;
 use std::fmt;
 use std::ops::ControlFlow;
 use std::time::Instant;
@@ -65,6 +66,70 @@ impl OdeSystem for ModelSystem<'_> {
     }
 }
 
+/// The solver's work so far, as a run's observer sees it (see [`Simulation::run_with_progress`]).
+/// The integrators count accepted and rejected steps only for their final [`SolverStats`], so
+/// those are not here.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Progress {
+    /// Right-hand sides evaluated so far; at the last sample, the solver's `rhs_evals`.
+    pub rhs_evals: u64,
+    /// Jacobians formed so far; at the last sample, the solver's `jacobian_evals`.
+    pub jacobian_evals: u64,
+    /// Wall-clock seconds since the first sample (so never more than the solver's final
+    /// `wall_time_s`, which also counts its set-up).
+    pub wall_time_s: f64,
+}
+
+/// Counters shared by the counting system (which the integrator drives) and the observer.
+#[derive(Default)]
+struct Counts {
+    rhs_evals: Cell<u64>,
+    jacobian_evals: Cell<u64>,
+}
+
+/// What an observer of [`Simulation::run_with_progress`] may ask about the run so far.
+pub struct RunProbe<'a> {
+    counts: &'a Counts,
+    started: Instant,
+}
+
+impl RunProbe<'_> {
+    /// The work done up to now (cheap: two counters and a look at the clock).
+    pub fn progress(&self) -> Progress {
+        Progress {
+            rhs_evals: self.counts.rhs_evals.get(),
+            jacobian_evals: self.counts.jacobian_evals.get(),
+            wall_time_s: self.started.elapsed().as_secs_f64(),
+        }
+    }
+}
+
+/// The model as an ODE system that counts what the integrator asks of it.
+struct CountingSystem<'a> {
+    inner: ModelSystem<'a>,
+    counts: &'a Counts,
+}
+
+impl OdeSystem for CountingSystem<'_> {
+    fn dim(&self) -> usize {
+        self.inner.dim()
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dxdt: &mut [f64]) {
+        self.counts.rhs_evals.set(self.counts.rhs_evals.get() + 1);
+        self.inner.rhs(t, x, dxdt);
+    }
+    fn jacobian(&mut self, t: f64, x: &[f64], jac: &mut [f64]) -> bool {
+        let provided = self.inner.jacobian(t, x, jac);
+        if provided {
+            // Not provided, the integrator forms it from rhs calls, which count as such.
+            self.counts
+                .jacobian_evals
+                .set(self.counts.jacobian_evals.get() + 1);
+        }
+        provided
+    }
+}
+
 impl Simulation {
     pub fn new(scene: &Scene) -> Result<Simulation, RunError> {
         let model = CompiledModel::compile(
@@ -93,12 +158,35 @@ impl Simulation {
         tol: &solvers::Tolerances,
         mut observer: impl FnMut(f64, &[f64]) -> ControlFlow<()>,
     ) -> Result<RunStats, RunError> {
+        self.run_with_progress(method, tol, |t, x, _| observer(t, x))
+    }
+
+    /// Runs the scene, calling `observer(t, x, probe)` at every output time; `probe.progress()`
+    /// tells the solver's work so far (for progress reports during a run).
+    pub fn run_with_progress(
+        &self,
+        method: solvers::Method,
+        tol: &solvers::Tolerances,
+        mut observer: impl FnMut(f64, &[f64], &RunProbe) -> ControlFlow<()>,
+    ) -> Result<RunStats, RunError> {
         let mut x = self.model.x0.clone();
         let mut samples = 0u64;
+        let counts = Counts::default();
+        let mut probe: Option<RunProbe> = None;
+        let mut observe = |t: f64, x: &[f64]| {
+            let probe = probe.get_or_insert_with(|| RunProbe {
+                counts: &counts,
+                started: Instant::now(),
+            });
+            observer(t, x, probe)
+        };
         if self.model.fidelity == Fidelity::Linear && self.model.is_autonomous() {
-            return Ok(self.run_linear_exact(&mut x, observer));
+            return Ok(self.run_linear_exact(&mut x, observe));
         }
-        let mut sys = ModelSystem { model: &self.model };
+        let mut sys = CountingSystem {
+            inner: ModelSystem { model: &self.model },
+            counts: &counts,
+        };
         let (stop, solver) = solvers::integrate(
             &mut sys,
             method,
@@ -108,7 +196,7 @@ impl Simulation {
             &self.breakpoints,
             |t, x| {
                 samples += 1;
-                observer(t, x)
+                observe(t, x)
             },
         )
         .map_err(RunError::Solve)?;
