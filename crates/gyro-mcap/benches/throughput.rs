@@ -36,6 +36,16 @@ fn cpu_s_of(file: &str) -> f64 {
     (ticks(11) + ticks(12)) / 100.0
 }
 
+fn varint_len(v: u64) -> usize {
+    (64 - (v | 1).leading_zeros() as usize).div_ceil(7)
+}
+
+/// Encoded bytes of a FrameTransform as the writer encodes it (every field written).
+fn pose_len(t_ns: u64, p: &Pose) -> usize {
+    let ts = 2 + varint_len(t_ns / 1_000_000_000) + varint_len(t_ns % 1_000_000_000);
+    (2 + ts) + (2 + p.parent_frame.len()) + (2 + p.child_frame.len()) + (2 + 27) + (2 + 36)
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let hours: f64 = std::env::var("GYRO_MCAP_BENCH_HOURS")
         .ok()
@@ -95,13 +105,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             *v = phasors[k][1] * 1e-2 + k as f64;
         }
         w.write_f64_record(rec_ch, t_ns, &values)?;
-        payload_bytes += 20 * 9;
+        // 15 fields with one-byte tags, 5 (numbers 16..20) with two.
+        payload_bytes += 15 * 9 + 5 * 10;
         for (k, p) in poses.iter_mut().enumerate() {
             let [c, s, _, _] = phasors[20 + k];
             p.translation_m = [0.1 * k as f64, 0.0, 0.05 * s];
             p.rotation_xyzw = [0.0, 0.0, s, c];
             w.write_pose(pose_ch, t_ns, p)?;
-            payload_bytes += 110;
+            payload_bytes += pose_len(t_ns, p) as u64;
         }
     }
     let encode_thread_cpu_s = thread_cpu_s() - thread_cpu0;

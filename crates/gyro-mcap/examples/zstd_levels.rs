@@ -3,8 +3,8 @@
 //! every level alike) and compressed size, on the recording's own decompressed chunks. This is
 //! how the writer's default level was chosen.
 //!
-//! `cargo run --release -p gyro-mcap --example zstd_levels -- FILE.mcap [LEVEL ...]`
-//! (default levels: 1 -1 -2 -3 -4 -5).
+//! `cargo run --release -p gyro-mcap --example zstd_levels -- FILE.mcap [LEVEL[:MIN_MATCH] ...]`
+//! (default levels: 1 -1 -2 -3 -4 -5; `-4:7` is level -4 with zstd's minimum match length 7).
 
 use std::time::Instant;
 
@@ -13,9 +13,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = args
         .next()
         .ok_or("usage: zstd_levels FILE.mcap [LEVEL ...]")?;
-    let mut levels: Vec<i32> = args.map(|a| a.parse()).collect::<Result<_, _>>()?;
+    let mut levels: Vec<String> = args.collect();
     if levels.is_empty() {
-        levels = vec![1, -1, -2, -3, -4, -5];
+        levels = ["1", "-1", "-2", "-3", "-4", "-5"]
+            .map(String::from)
+            .to_vec();
     }
     let reps: usize = std::env::var("REPS")
         .ok()
@@ -41,10 +43,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         total as f64 / 1e6,
         file_compressed as f64 / 1e6
     );
-    let mut compressors = levels
-        .iter()
-        .map(|&l| zstd::bulk::Compressor::new(l))
-        .collect::<Result<Vec<_>, _>>()?;
+    let mut compressors = Vec::new();
+    for spec in &levels {
+        let (level, min_match) = match spec.split_once(':') {
+            Some((l, m)) => (l.parse()?, Some(m.parse()?)),
+            None => (spec.parse()?, None),
+        };
+        let mut c = zstd::bulk::Compressor::new(level)?;
+        if let Some(m) = min_match {
+            c.set_parameter(zstd::zstd_safe::CParameter::MinMatch(m))?;
+        }
+        compressors.push(c);
+    }
     let mut seconds = vec![0.0; levels.len()];
     let mut sizes = vec![0usize; levels.len()];
     let mut out = Vec::new();
@@ -68,7 +78,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let base = sizes[0] as f64;
     for ((level, s), size) in levels.iter().zip(&seconds).zip(&sizes) {
         println!(
-            "level {level:>3}: {:5.0} MB/s, ratio {:.2}, {:.1} MB compressed ({:+.1} % against level {}), \
+            "level {level:>5}: {:5.0} MB/s, ratio {:.2}, {:.1} MB compressed ({:+.1} % against level {}), \
              file {:+.1} MB",
             total as f64 / s / 1e6,
             total as f64 / *size as f64,

@@ -348,7 +348,19 @@ impl<'a> Wire<'a> {
     pub(crate) fn done(&self) -> bool {
         self.pos >= self.data.len()
     }
+    /// A varint: one byte inline (the common case: keys, lengths, small numbers), longer ones
+    /// out of line.
+    #[inline]
     pub(crate) fn varint(&mut self) -> Result<u64, String> {
+        if let Some(&b) = self.data.get(self.pos)
+            && b < 0x80
+        {
+            self.pos += 1;
+            return Ok(u64::from(b));
+        }
+        self.varint_long()
+    }
+    fn varint_long(&mut self) -> Result<u64, String> {
         let mut v = 0u64;
         for i in 0..10 {
             let Some(&b) = self.data.get(self.pos) else {
@@ -385,6 +397,7 @@ impl<'a> Wire<'a> {
         self.pos = at;
         false
     }
+    #[inline]
     pub(crate) fn key(&mut self) -> Result<(u32, u32), String> {
         let key = self.varint()?;
         let number = key >> 3;
@@ -393,6 +406,7 @@ impl<'a> Wire<'a> {
         }
         Ok((number as u32, (key & 7) as u32))
     }
+    #[inline]
     fn bytes(&mut self, n: usize) -> Result<&'a [u8], String> {
         if n > self.data.len() - self.pos {
             return Err(format!(
@@ -415,6 +429,7 @@ impl<'a> Wire<'a> {
         a.copy_from_slice(self.bytes(4)?);
         Ok(u32::from_le_bytes(a))
     }
+    #[inline]
     pub(crate) fn len_delimited(&mut self) -> Result<&'a [u8], String> {
         let n = self.varint()?;
         let n = usize::try_from(n).unwrap_or(usize::MAX);
