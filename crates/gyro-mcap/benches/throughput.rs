@@ -1,6 +1,8 @@
 //! Throughput of the recording contract on a realistic load: a 20-field f64 record channel and
 //! a 6-frame pose channel at 10 Hz for a simulated 24 h (864 000 records + 5 184 000 poses).
-//! `cargo bench -p gyro-mcap --bench throughput` (set GYRO_MCAP_BENCH_HOURS to change the length).
+//! `cargo bench -p gyro-mcap --bench throughput` (set GYRO_MCAP_BENCH_HOURS to change the length,
+//! GYRO_MCAP_BENCH_ZSTD_LEVEL the level; GYRO_MCAP_BENCH_WRITE_ONLY skips the reads,
+//! GYRO_MCAP_BENCH_KEEP=PATH keeps the file there).
 //! `benches/python/peer_throughput.py` does the same load with the reference Python libraries,
 //! to compare the two at the same moment on a shared machine.
 
@@ -145,8 +147,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
 
     if std::env::var_os("GYRO_MCAP_BENCH_WRITE_ONLY").is_some() {
-        std::fs::remove_file(&path)?;
-        return Ok(());
+        return finish_with(&path);
     }
 
     let started = Instant::now();
@@ -194,6 +195,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "read_all per CPU second: {:.2} M msgs/s ({read_cpu_s:.2} CPU s)",
         messages / read_cpu_s / 1e6
     );
-    std::fs::remove_file(&path)?;
+    finish_with(&path)
+}
+
+/// Removes the bench's file, or moves it to `GYRO_MCAP_BENCH_KEEP` (to look at its chunks).
+fn finish_with(path: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+    match std::env::var_os("GYRO_MCAP_BENCH_KEEP") {
+        Some(keep) => std::fs::rename(path, keep)?,
+        None => std::fs::remove_file(path)?,
+    }
     Ok(())
 }
