@@ -27,6 +27,9 @@ use crate::engine::EvalInput;
 use crate::expr::QuadExpr;
 use crate::real::{Jet, M3, Real, V3};
 
+mod rates;
+pub use rates::evaluate_rates;
+
 /// Mass properties of a frame (its own body and every body rigidly attached to it).
 #[derive(Clone, Debug, PartialEq)]
 struct MassProps {

@@ -927,6 +927,68 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
     }
 
+    /// The reduced `full` equations at (t, q_ind, qd_ind): M_red and r_red = c_red + K_red q̇_ind,
+    /// by [`kinetics::evaluate_rates`] (K is never formed). Servo relations as in [`Self::reduced_n`].
+    fn reduced_rates_n<T: Real, const N: usize>(
+        &self,
+        t: T,
+        q_ind: &[T],
+        qd_ind: &[T],
+        spins: &[(usize, T, T)],
+        m_red: &mut [[T; N]; N],
+        r_red: &mut [T; N],
+    ) {
+        let n = self.chain.n;
+        let ni = self.independent.len();
+        let (rb, w, g) = self.base_at(t);
+        if self.no_servo {
+            let inp = EvalInput {
+                q: q_ind,
+                qd: qd_ind,
+                u: qd_ind,
+                drop_quadratic: &[],
+                spin_momentum: &self.spin_momentum,
+                world_from_base: &rb,
+                base_rate: &w,
+                gravity: g,
+            };
+            kinetics::evaluate_rates::<T, N>(&self.kinetics, &inp, spins, m_red, r_red);
+            return;
+        }
+        let mut q = [T::zero(); N];
+        let mut qd = [T::zero(); N];
+        self.expand(q_ind, &mut q[..n], true);
+        self.expand(qd_ind, &mut qd[..n], false);
+        let inp = EvalInput {
+            q: &q[..n],
+            qd: &qd[..n],
+            u: &qd[..n],
+            drop_quadratic: &[],
+            spin_momentum: &self.spin_momentum,
+            world_from_base: &rb,
+            base_rate: &w,
+            gravity: g,
+        };
+        let mut m = [[T::zero(); N]; N];
+        let mut r = [T::zero(); N];
+        kinetics::evaluate_rates::<T, N>(&self.kinetics, &inp, spins, &mut m, &mut r);
+        // q̇ = S q̇_ind, so K q̇ already is K_red q̇_ind: only M's columns are folded.
+        let s = &self.servo_s;
+        for (ri, &i) in self.independent.iter().enumerate() {
+            r_red[ri] = r[i];
+            for cj in 0..ni {
+                let mut sm = T::zero();
+                for l in 0..n {
+                    let a = s[l * ni + cj];
+                    if a != 0.0 {
+                        sm += m[i][l] * a;
+                    }
+                }
+                m_red[ri][cj] = sm;
+            }
+        }
+    }
+
     fn rhs_n<T: Real, const N: usize>(
         &self,
         fidelity: Fidelity,
@@ -1017,15 +1079,8 @@ impl<M: ShipMotion> CompiledModel<M> {
             }
             _ => {
                 let qd = &x[ni..2 * ni];
-                self.reduced_n::<T, N>(false, t, q, qd, qd, spins, &mut m, &mut k, &mut c);
                 let mut r = [T::zero(); N];
-                for i in 0..ni {
-                    let mut s = c[i];
-                    for j in 0..ni {
-                        s += k[i][j] * qd[j];
-                    }
-                    r[i] = s;
-                }
+                self.reduced_rates_n::<T, N>(t, q, qd, spins, &mut m, &mut r);
                 // Without servo relations M is the chain's own mass matrix: symmetric
                 // positive definite, so LDLᵀ (about half the cost of pivoted LU here).
                 let solved = (self.no_servo && linalg::solve_spd_nested(&m, &mut r, ni))

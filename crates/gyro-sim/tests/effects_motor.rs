@@ -250,8 +250,10 @@ fn motor_options_are_checked() {
 fn motor_jacobian_matches_finite_differences() {
     let path = motor_design("jacobian", 20000.0, 12000.0, 300.0);
     for fidelity in ["full", "gyroscopic"] {
-        let text = harbour(&path.display().to_string(), 0.1, "", 1.0)
-            .replace("fidelity = \"gyroscopic\"", &format!("fidelity = \"{fidelity}\""));
+        let text = harbour(&path.display().to_string(), 0.1, "", 1.0).replace(
+            "fidelity = \"gyroscopic\"",
+            &format!("fidelity = \"{fidelity}\""),
+        );
         let sc = scene_from(&text, &SceneOverrides::default());
         let sim = Simulation::new(&sc).expect("compiles");
         let m = &sim.model;
@@ -280,7 +282,10 @@ fn motor_jacobian_matches_finite_differences() {
                 xp[col] += h;
                 xm[col] -= h;
                 let (fp, fm) = (f(&xp), f(&xm));
-                fp.iter().zip(&fm).map(|(p, q)| (p - q) / (2.0 * h)).collect()
+                fp.iter()
+                    .zip(&fm)
+                    .map(|(p, q)| (p - q) / (2.0 * h))
+                    .collect()
             };
             let (d1, d2) = (central(h), central(h / 2.0));
             for row in 0..dim {
