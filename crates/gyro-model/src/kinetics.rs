@@ -75,6 +75,49 @@ struct Frame {
     forces: Vec<BodyForceElement>,
 }
 
+impl BodyForceElement {
+    /// Moment about the pivot (frame axes) of the force applied at its point, the frame's
+    /// origin being at `p` from the pivot: the force's generalised force is jwᵢ·τ.
+    fn torque<T: Real>(&self, q: &[T], p: &V3<T>) -> V3<T> {
+        let pt: [T; 3] = std::array::from_fn(|k| self.point[k].eval(q));
+        let pt = match &self.rotation {
+            Some(rm) => M3::<T>::from_f64(*rm).mul_v(&V3(pt)).0,
+            None => pt,
+        };
+        let rp = V3([
+            p.0[0] + pt[0] + self.origin[0],
+            p.0[1] + pt[1] + self.origin[1],
+            p.0[2] + pt[2] + self.origin[2],
+        ]);
+        rp.cross(&V3::from_f64(self.force))
+    }
+}
+
+impl Frame {
+    /// The rotors' momenta along their axes in frame axes, and their rates: held (a number), or
+    /// a motor's state H = CΩ with its rate Ḣ (whose reaction on the case is −Ḣ ŝ).
+    fn rotor_momenta<T: Real>(&self, spins: &[(usize, T, T)], held: &[f64]) -> ([T; 3], [T; 3]) {
+        let mut hv = [T::zero(); 3];
+        let mut hv_dot = [T::zero(); 3];
+        for &(bi, ax) in &self.rotors {
+            match spins.iter().find(|s| s.0 == bi) {
+                Some(&(_, h, h_dot)) => {
+                    for k in 0..3 {
+                        hv[k] += h * ax[k];
+                        hv_dot[k] += h_dot * ax[k];
+                    }
+                }
+                None => {
+                    for k in 0..3 {
+                        hv[k] += T::cst(ax[k] * held[bi]);
+                    }
+                }
+            }
+        }
+        (hv, hv_dot)
+    }
+}
+
 /// A design's chain compiled for evaluation in body axes. Frame 0 is the base.
 #[derive(Clone, Debug)]
 pub struct Kinetics {
@@ -514,17 +557,7 @@ pub fn evaluate<T: Real, const N: usize>(
 
         // Forces applied to bodies of this frame (generalised forces from real parts).
         for e in &fr.forces {
-            let pt: [T; 3] = std::array::from_fn(|k| e.point[k].eval(inp.q));
-            let pt = match &e.rotation {
-                Some(rm) => M3::<T>::from_f64(*rm).mul_v(&V3(pt)).0,
-                None => pt,
-            };
-            let rp = V3([
-                st.p.0[0].v + pt[0] + e.origin[0],
-                st.p.0[1].v + pt[1] + e.origin[1],
-                st.p.0[2].v + pt[2] + e.origin[2],
-            ]);
-            let tau = rp.cross(&V3::from_f64(e.force));
+            let tau = e.torque(inp.q, &re(&st.p));
             for (i, qi) in qf.iter_mut().enumerate().take(n) {
                 if st.jw_on & (1 << i) != 0 {
                     *qi += re(&st.jw[i]).dot(&tau);
@@ -539,24 +572,7 @@ pub fn evaluate<T: Real, const N: usize>(
         let m = mp.m;
         // Rotors' momenta along their axes: held (a number), or a motor's state H = CΩ with
         // its rate Ḣ (whose reaction on the case is −Ḣ ŝ: the ∂ₜb term below).
-        let mut hv = [T::zero(); 3];
-        let mut hv_dot = [T::zero(); 3];
-        for &(bi, ax) in &fr.rotors {
-            match spins.iter().find(|s| s.0 == bi) {
-                Some(&(_, h, h_dot)) => {
-                    for k in 0..3 {
-                        hv[k] += h * ax[k];
-                        hv_dot[k] += h_dot * ax[k];
-                    }
-                }
-                None => {
-                    let h = inp.spin_momentum[bi];
-                    for k in 0..3 {
-                        hv[k] += T::cst(ax[k] * h);
-                    }
-                }
-            }
-        }
+        let (hv, hv_dot) = fr.rotor_momenta(spins, inp.spin_momentum);
         let has_spin = hv.iter().any(|x| *x != T::zero());
         let spin_rate = hv_dot.iter().any(|x| *x != T::zero());
         // The centre of gravity from the pivot: a constant in frame axes when the frame turns

@@ -254,17 +254,7 @@ pub fn evaluate_rates<T: Real, const N: usize>(
 
         // Forces applied to bodies of this frame (generalised forces from real parts).
         for e in &fr.forces {
-            let pt3: [T; 3] = std::array::from_fn(|k| e.point[k].eval(inp.q));
-            let pt3 = match &e.rotation {
-                Some(rm) => M3::<T>::from_f64(*rm).mul_v(&V3(pt3)).0,
-                None => pt3,
-            };
-            let rp = V3([
-                st.p.0[0].v + pt3[0] + e.origin[0],
-                st.p.0[1].v + pt3[1] + e.origin[1],
-                st.p.0[2].v + pt3[2] + e.origin[2],
-            ]);
-            let tau = rp.cross(&V3::from_f64(e.force));
+            let tau = e.torque(inp.q, &re(&st.p));
             for (i, qi) in qf.iter_mut().enumerate().take(n) {
                 if st.jw_on & (1 << i) != 0 {
                     *qi += jwr[i].dot(&tau);
@@ -276,24 +266,7 @@ pub fn evaluate_rates<T: Real, const N: usize>(
             continue;
         };
         let m = mp.m;
-        let mut hv = [T::zero(); 3];
-        let mut hv_dot = [T::zero(); 3];
-        for &(bi, ax) in &fr.rotors {
-            match spins.iter().find(|s| s.0 == bi) {
-                Some(&(_, h, h_dot)) => {
-                    for k in 0..3 {
-                        hv[k] += h * ax[k];
-                        hv_dot[k] += h_dot * ax[k];
-                    }
-                }
-                None => {
-                    let h = inp.spin_momentum[bi];
-                    for k in 0..3 {
-                        hv[k] += T::cst(ax[k] * h);
-                    }
-                }
-            }
-        }
+        let (hv, hv_dot) = fr.rotor_momenta(spins, inp.spin_momentum);
         let has_spin = hv.iter().any(|x| *x != T::zero());
         let spin_rate = hv_dot.iter().any(|x| *x != T::zero());
         let cgp = if fr.at_pivot {
