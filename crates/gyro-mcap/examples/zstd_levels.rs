@@ -3,8 +3,9 @@
 //! every level alike) and compressed size, on the recording's own decompressed chunks. This is
 //! how the writer's default level was chosen.
 //!
-//! `cargo run --release -p gyro-mcap --example zstd_levels -- FILE.mcap [LEVEL[:MIN_MATCH] ...]`
-//! (default levels: 1 -1 -2 -3 -4 -5; `-4:7` is level -4 with zstd's minimum match length 7).
+//! `cargo run --release -p gyro-mcap --example zstd_levels -- FILE.mcap [LEVEL[:PARAM=V,...] ...]`
+//! (default levels: 1 -1 -2 -3 -4 -5). Parameters override the level's: `mm` minimum match
+//! length, `hl` hash log, `wl` window log, `tl` target length; `-4:mm=7,hl=14` is level -4 with those two changed.
 
 use std::time::Instant;
 
@@ -45,13 +46,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let mut compressors = Vec::new();
     for spec in &levels {
-        let (level, min_match) = match spec.split_once(':') {
-            Some((l, m)) => (l.parse()?, Some(m.parse()?)),
-            None => (spec.parse()?, None),
-        };
-        let mut c = zstd::bulk::Compressor::new(level)?;
-        if let Some(m) = min_match {
-            c.set_parameter(zstd::zstd_safe::CParameter::MinMatch(m))?;
+        let (level, params) = spec.split_once(':').unwrap_or((spec, ""));
+        let mut c = zstd::bulk::Compressor::new(level.parse()?)?;
+        for p in params.split(',').filter(|p| !p.is_empty()) {
+            use zstd::zstd_safe::CParameter;
+            let (key, v) = p.split_once('=').ok_or("parameters are KEY=VALUE")?;
+            let v: u32 = v.parse()?;
+            c.set_parameter(match key {
+                "mm" => CParameter::MinMatch(v),
+                "hl" => CParameter::HashLog(v),
+                "wl" => CParameter::WindowLog(v),
+                "tl" => CParameter::TargetLength(v),
+                _ => return Err(format!("unknown parameter {key} (mm hl wl tl)").into()),
+            })?;
         }
         compressors.push(c);
     }

@@ -401,16 +401,15 @@ pub fn record(
                 }
             }
             if t >= next_stats_s && t < scene.duration_s {
-                // A progress report: the work so far. The integrators count steps only for
-                // their final statistics, so steps and rejected steps are 0 until the end.
+                // A progress report: the work so far.
                 let p = probe.progress();
                 w.write_record(
                     stats_ch,
                     ns(t),
                     &[
                         Value::F64(t),
-                        Value::U64(0),
-                        Value::U64(0),
+                        Value::U64(p.steps),
+                        Value::U64(p.rejected_steps),
                         Value::U64(p.rhs_evals),
                         Value::U64(p.jacobian_evals),
                         Value::F64(p.wall_time_s),

@@ -67,10 +67,12 @@ impl OdeSystem for ModelSystem<'_> {
 }
 
 /// The solver's work so far, as a run's observer sees it (see [`Simulation::run_with_progress`]).
-/// The integrators count accepted and rejected steps only for their final [`SolverStats`], so
-/// those are not here.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Progress {
+    /// Steps accepted so far; at the last sample, the solver's `steps`.
+    pub steps: u64,
+    /// Steps rejected so far; at the last sample, the solver's `rejected_steps`.
+    pub rejected_steps: u64,
     /// Right-hand sides evaluated so far; at the last sample, the solver's `rhs_evals`.
     pub rhs_evals: u64,
     /// Jacobians formed so far; at the last sample, the solver's `jacobian_evals`.
@@ -83,6 +85,8 @@ pub struct Progress {
 /// Counters shared by the counting system (which the integrator drives) and the observer.
 #[derive(Default)]
 struct Counts {
+    steps: Cell<u64>,
+    rejected_steps: Cell<u64>,
     rhs_evals: Cell<u64>,
     jacobian_evals: Cell<u64>,
 }
@@ -97,6 +101,8 @@ impl RunProbe<'_> {
     /// The work done up to now (cheap: two counters and a look at the clock).
     pub fn progress(&self) -> Progress {
         Progress {
+            steps: self.counts.steps.get(),
+            rejected_steps: self.counts.rejected_steps.get(),
             rhs_evals: self.counts.rhs_evals.get(),
             jacobian_evals: self.counts.jacobian_evals.get(),
             wall_time_s: self.started.elapsed().as_secs_f64(),
@@ -127,6 +133,14 @@ impl OdeSystem for CountingSystem<'_> {
                 .set(self.counts.jacobian_evals.get() + 1);
         }
         provided
+    }
+    fn step_counted(&mut self, accepted: bool) {
+        let c = if accepted {
+            &self.counts.steps
+        } else {
+            &self.counts.rejected_steps
+        };
+        c.set(c.get() + 1);
     }
 }
 

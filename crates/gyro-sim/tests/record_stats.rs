@@ -72,8 +72,10 @@ fn a_multi_hour_run_reports_every_hour_and_ends_with_the_final_stats() {
     assert!(wall.windows(2).all(|w| w[0] <= w[1]), "{wall:?}");
     assert_eq!(*wall.last().unwrap(), s.wall_time_s);
     // The progress reports count the work as it is done: the first is well short of the end.
-    let rhs = u64s(&t, "rhs_evals");
-    assert!(rhs[0] > 0 && rhs[0] < s.rhs_evals, "{rhs:?}");
+    for name in ["rhs_evals", "steps"] {
+        let v = u64s(&t, name);
+        assert!(v[0] > 0 && v[0] < *v.last().unwrap(), "{name}: {v:?}");
+    }
 }
 
 /// At the last sample, the counts the run loop reports are the integrator's own, for every
@@ -104,6 +106,8 @@ fn progress_counts_are_the_solvers_counts() {
             })
             .unwrap();
         let s = stats.solver;
+        assert_eq!(last.steps, s.steps, "{method}");
+        assert_eq!(last.rejected_steps, s.rejected_steps, "{method}");
         assert_eq!(last.rhs_evals, s.rhs_evals, "{method}");
         assert_eq!(last.jacobian_evals, s.jacobian_evals, "{method}");
         assert!(last.wall_time_s <= s.wall_time_s, "{method}");

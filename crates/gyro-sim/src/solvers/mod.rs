@@ -44,6 +44,9 @@ pub trait OdeSystem {
     fn jacobian(&mut self, _t: f64, _x: &[f64], _jac: &mut [f64]) -> bool {
         false
     }
+    /// Told of every step attempt as the integrator counts it (accepted or rejected), so an
+    /// observer can report steps during a run; the final [`SolverStats`] hold the same totals.
+    fn step_counted(&mut self, _accepted: bool) {}
 }
 
 /// Integration method.
@@ -547,6 +550,7 @@ fn run<S: OdeSystem, St: Stepper>(
             let attempt = st.attempt(sys, w, t, x, h, tol, stats)?;
             if !attempt.accepted {
                 stats.rejected_steps += 1;
+                sys.step_counted(false);
                 h = attempt.h_next;
                 continue;
             }
@@ -555,6 +559,7 @@ fn run<S: OdeSystem, St: Stepper>(
                 return Err(SolveError::NonFiniteState { t: t_new });
             }
             stats.steps += 1;
+            sys.step_counted(true);
 
             let mut dense_ready = false;
             while let Some(ts) = clock.peek() {
