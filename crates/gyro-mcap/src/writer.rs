@@ -129,6 +129,18 @@ enum Job {
     Sync(mpsc::SyncSender<bool>),
 }
 
+/// A chunk compressor at `level`. At zstd's fast levels (1 and below) its match-finder table
+/// shrinks from 2¹³ to 2¹² entries (16 KiB, so it stays in L1 cache): on 24-h recordings'
+/// chunks that compresses 3–6 % faster for 0.3–0.4 % more bytes (`examples/zstd_levels.rs`
+/// with `-4:hl=12`). Slower levels keep their own tables.
+fn compressor(level: i32) -> std::io::Result<zstd::bulk::Compressor<'static>> {
+    let mut c = zstd::bulk::Compressor::new(level)?;
+    if level <= 1 {
+        c.set_parameter(zstd::zstd_safe::CParameter::HashLog(12))?;
+    }
+    Ok(c)
+}
+
 /// Compresses a chunk in place (`compressed`, `uncompressed_crc`).
 fn compress(
     compressor: &mut zstd::bulk::Compressor<'static>,
@@ -302,7 +314,7 @@ fn spawn_workers(
     let mut outputs = Vec::with_capacity(k);
     let mut compressors = Vec::with_capacity(k);
     for i in 0..k {
-        let Ok(mut compressor) = zstd::bulk::Compressor::new(zstd_level) else {
+        let Ok(mut compressor) = compressor(zstd_level) else {
             return Err(side);
         };
         let (tx, rx) = mpsc::sync_channel::<Job>(QUEUED_PER_THREAD);
@@ -422,8 +434,8 @@ impl Sink {
         zstd_level: i32,
     ) -> Result<Self, RecordingError> {
         let file = File::create(path).map_err(io_error(path, "creating"))?;
-        let compressor = zstd::bulk::Compressor::new(zstd_level)
-            .map_err(io_error(path, "setting up zstd compression"))?;
+        let compressor =
+            compressor(zstd_level).map_err(io_error(path, "setting up zstd compression"))?;
         let chunk_size = usize::try_from(chunk_size.clamp(1, 1 << 30)).unwrap_or(1 << 20);
         let side = Box::new(FileSide {
             out: Out {
