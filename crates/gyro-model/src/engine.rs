@@ -356,10 +356,10 @@ pub fn body_poses(
     q: &[f64],
     world_from_base: &M3<f64>,
 ) -> Vec<([[f64; 3]; 3], [f64; 3])> {
-    let mut out: Vec<(M3<f64>, V3<f64>)> = Vec::with_capacity(chain.bodies.len());
+    let mut out: Vec<([[f64; 3]; 3], [f64; 3])> = Vec::with_capacity(chain.bodies.len());
     for body in &chain.bodies {
         let (r_par, p_par) = match body.parent {
-            Some(pi) => out[pi],
+            Some(pi) => (M3(out[pi].0), V3(out[pi].1)),
             None => (*world_from_base, V3::zero()),
         };
         let p_b = p_par.add(&r_par.mul_v(&V3::from_f64(body.origin)));
@@ -371,9 +371,9 @@ pub fn body_poses(
             Some(h) => r_joint.rotate_about_axis(h.axis, h.angle.eval(q)),
             None => r_joint,
         };
-        out.push((r_b, p_b));
+        out.push((r_b.0, p_b.0));
     }
-    out.into_iter().map(|(r, p)| (r.0, p.0)).collect()
+    out
 }
 
 /// Absolute angular velocity of every body (world axes) at a state, f64.

@@ -228,6 +228,9 @@ pub struct Readout {
     pub q: Vec<f64>,
     /// All rates, rad/s.
     pub qd: Vec<f64>,
+    /// Every body's pose as [`CompiledModel::body_poses`] gives it (the reading needs them, so
+    /// a recorder need not compute them again).
+    pub poses: Vec<([[f64; 3]; 3], [f64; 3])>,
 }
 
 #[derive(Clone, Debug)]
@@ -1273,15 +1276,23 @@ impl<M: ShipMotion> CompiledModel<M> {
     /// Rates of all independent coordinates at a state (for gyroscopic fidelity they come from
     /// the precession equations).
     pub fn rates(&self, t: f64, x: &[f64]) -> Vec<f64> {
+        let mut r = [0.0; MAX_COORDINATES];
+        let ni = self.rates_into(t, x, &mut r);
+        r[..ni].to_vec()
+    }
+
+    /// [`Self::rates`] into `out` (no allocation); returns how many there are.
+    fn rates_into(&self, t: f64, x: &[f64], out: &mut [f64; MAX_COORDINATES]) -> usize {
         let ni = self.independent.len();
         match self.fidelity {
             Fidelity::Gyroscopic => {
-                let mut dx = vec![0.0; self.dim()];
-                self.rhs(t, x, &mut dx);
-                dx[..ni].to_vec()
+                let mut dx = [0.0; 2 * MAX_COORDINATES + MAX_MOTORS];
+                self.rhs(t, x, &mut dx[..self.dim()]);
+                out[..ni].copy_from_slice(&dx[..ni]);
             }
-            _ => x[ni..2 * ni].to_vec(),
+            _ => out[..ni].copy_from_slice(&x[ni..2 * ni]),
         }
+        ni
     }
 
     /// All coordinates and rates (servo-driven included) at a state.
@@ -1291,8 +1302,9 @@ impl<M: ShipMotion> CompiledModel<M> {
         let mut q = vec![0.0; n];
         let mut qd = vec![0.0; n];
         self.expand(&x[..ni], &mut q, true);
-        let r = self.rates(t, x);
-        self.expand(&r, &mut qd, false);
+        let mut r = [0.0; MAX_COORDINATES];
+        self.rates_into(t, x, &mut r);
+        self.expand(&r[..ni], &mut qd, false);
         (q, qd)
     }
 
@@ -1328,6 +1340,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             compass_heading_rad: (true_heading + err).rem_euclid(std::f64::consts::TAU),
             q,
             qd,
+            poses,
         }
     }
 

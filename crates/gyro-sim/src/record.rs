@@ -385,7 +385,7 @@ pub fn record(
                 };
                 ship_pose.rotation_xyzw = quat_from_matrix(&ship);
                 w.write_pose(tf_ch, ns(t), &ship_pose)?;
-                let poses = model.body_poses(t, &r.q);
+                let poses = &r.poses;
                 for (bi, (rot, pos)) in poses.iter().enumerate() {
                     // parent_from_child = parent_worldᵀ · child_world.
                     let (prot, ppos) = match model.design.bodies[bi].parent {
