@@ -152,8 +152,60 @@ pub fn recover(partial: &Path, out: &Path) -> Result<RecoverReport, RecordingErr
         }
     }
     let defaults = WriterOptions::default();
-    let tmp = partial_path(out);
-    let sink = Sink::create(&tmp, defaults.chunk_size_bytes, defaults.zstd_level)?;
+    let tmp = temp_path(partial, out);
+    let result = recover_into(c, partial, &tmp, defaults);
+    let (messages, chunks, kept_until, stopped_because) = match result {
+        Ok(r) => r,
+        Err(e) => {
+            // Nothing half-written stays behind; the input is untouched.
+            let _ = std::fs::remove_file(&tmp);
+            return Err(e);
+        }
+    };
+    std::fs::rename(&tmp, out).map_err(io_error(&tmp, "renaming to the recovered name"))?;
+    let bytes_dropped = if stopped_because.is_some() {
+        data.len() as u64 - kept_until
+    } else {
+        0
+    };
+    Ok(RecoverReport {
+        out: out.to_path_buf(),
+        messages,
+        chunks,
+        bytes_dropped,
+        stopped_because,
+    })
+}
+
+/// Where [`recover`] writes before renaming to `out`: `<out>.recovering.partial`, never the
+/// input itself. (`partial_path(out)` would be the input in the usual call, recovering
+/// `run.mcap.partial` to `run.mcap`; writing there would destroy the only copy of the run if the
+/// recovery failed half-way, e.g. on a full disk.)
+fn temp_path(partial: &Path, out: &Path) -> PathBuf {
+    let mut s = out.as_os_str().to_owned();
+    s.push(".recovering");
+    let mut tmp = partial_path(Path::new(&s));
+    let same = |a: &Path, b: &Path| {
+        a == b || matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
+    };
+    while same(&tmp, partial) {
+        let mut s = tmp.into_os_string();
+        s.push(".partial");
+        tmp = PathBuf::from(s);
+    }
+    tmp
+}
+
+/// Reads the data section from `c` (just past the header) into a recording at `tmp`: messages
+/// kept, chunks kept, the input's offset after the last record kept, and why reading stopped
+/// early (if it did).
+fn recover_into(
+    mut c: Cursor<'_>,
+    partial: &Path,
+    tmp: &Path,
+    defaults: WriterOptions,
+) -> Result<(u64, u64, u64, Option<String>), RecordingError> {
+    let sink = Sink::create(tmp, defaults.chunk_size_bytes, defaults.zstd_level)?;
     let mut rec = Recoverer {
         sink,
         schema_ids: HashMap::new(),
@@ -208,18 +260,5 @@ pub fn recover(partial: &Path, out: &Path) -> Result<RecoverReport, RecordingErr
     let messages = rec.sink.message_count();
     let chunks = rec.chunks;
     rec.sink.finish()?;
-    drop(rec);
-    std::fs::rename(&tmp, out).map_err(io_error(&tmp, "renaming to the recovered name"))?;
-    let bytes_dropped = if stopped_because.is_some() {
-        data.len() as u64 - kept_until
-    } else {
-        0
-    };
-    Ok(RecoverReport {
-        out: out.to_path_buf(),
-        messages,
-        chunks,
-        bytes_dropped,
-        stopped_because,
-    })
+    Ok((messages, chunks, kept_until, stopped_because))
 }

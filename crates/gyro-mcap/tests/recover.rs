@@ -70,6 +70,39 @@ fn dropping_a_writer_keeps_its_open_chunk_for_recovery() {
 }
 
 #[test]
+fn recovering_to_the_default_name_leaves_the_partial_file_as_it_was() {
+    // The usual call: `run.mcap.partial` recovered to `run.mcap`, whose own `.partial` name is
+    // the input. The recovery must not write over the only copy of the run.
+    let dir = tmp_dir("default_name");
+    let path = dir.join("run.mcap");
+    let (mut w, ch) = start(&path, WriterOptions::default());
+    for i in 0..300 {
+        for m in step(i) {
+            write(&mut w, &ch, &m);
+        }
+    }
+    w.flush_chunk().unwrap();
+    std::mem::forget(w);
+    let partial = partial_path(&path);
+    let before = std::fs::read(&partial).unwrap();
+    let report = recover(&partial, &path).unwrap();
+    assert_eq!(report.messages as usize, stream(300).len());
+    assert_eq!(std::fs::read(&partial).unwrap(), before, "input untouched");
+    assert_prefix(&read_back(&Recording::open(&path).unwrap()), &stream(300));
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|n| n.contains("recovering"))
+        .collect();
+    assert!(left.is_empty(), "no temporary file left: {left:?}");
+
+    // A recovery that cannot write its output fails naming it, and leaves the input as it was.
+    let e = recover(&partial, &dir.join("no-such-dir").join("run.mcap")).unwrap_err();
+    assert!(e.to_string().contains("no-such-dir"), "{e}");
+    assert_eq!(std::fs::read(&partial).unwrap(), before);
+}
+
+#[test]
 fn a_partial_file_cut_anywhere_recovers_to_a_prefix_of_whole_chunks() {
     let dir = tmp_dir("cut");
     let path = dir.join("run.mcap");

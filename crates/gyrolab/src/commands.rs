@@ -333,6 +333,7 @@ pub fn recover(partial: &Path, output: Option<PathBuf>, json: bool) -> Result<Ex
         if let Some(why) = r.stopped_because {
             println!("  stopped because: {why}");
         }
+        println!("  {} is left as it was", partial.display());
     }
     Ok(ExitCode::SUCCESS)
 }

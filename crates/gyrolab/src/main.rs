@@ -32,7 +32,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Turn a killed run's `.mcap.partial` into a valid recording (up to its last whole chunk).
+    /// Turn a killed run's `.mcap.partial` into a valid recording (up to its last whole chunk);
+    /// the `.partial` file is left as it was.
     Recover {
         partial: PathBuf,
         /// Output path (default: the partial's name without `.partial`).
