@@ -134,7 +134,23 @@ impl Run {
             .and_then(|s| s.trim().parse::<f64>().ok())
             .filter(|v| v.is_finite())
     }
+
+    /// A value of how the run ended (`status`, `steps`, `wall_time_s`, …): the `result` record,
+    /// written when the run closes its file, or the `run` record of files written before the two
+    /// were split. `None` in a file recovered from a killed run.
+    pub fn result(&self, key: &str) -> Option<&str> {
+        self.meta("result", key).or_else(|| self.meta("run", key))
+    }
+
+    /// How the run ended: `complete`, `interrupted at t = … s`, or [`RECOVERED_STATUS`] when the
+    /// file has no result (its writer was killed and `gyrolab recover` salvaged it).
+    pub fn status(&self) -> &str {
+        self.result("status").unwrap_or(RECOVERED_STATUS)
+    }
 }
+
+/// [`Run::status`] of a recording with no `result` record.
+pub const RECOVERED_STATUS: &str = "incomplete (no result record: recovered from a killed run)";
 
 pub(crate) fn quoted<'a>(names: impl Iterator<Item = &'a str>) -> String {
     let v: Vec<String> = names.map(|n| format!("{n:?}")).collect();

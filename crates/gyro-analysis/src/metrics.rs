@@ -652,6 +652,7 @@ fn summarise(
     rolling: Option<&RollingError>,
 ) -> RunMetrics {
     let meta = |k: &str| run.meta("run", k).unwrap_or_default().to_owned();
+    let result_f64 = |k: &str| run.result(k).and_then(|s| s.trim().parse::<f64>().ok());
     let v = |e: Option<crate::fit::Estimate>| e.map(|e| e.value);
     let sd = |e: Option<crate::fit::Estimate>| e.map(|e| e.sigma);
     let worst = ballistic
@@ -685,7 +686,7 @@ fn summarise(
         rtol: run.meta_f64("run", "rtol"),
         atol: run.meta_f64("run", "atol"),
         effects: meta("effects"),
-        status: meta("status"),
+        status: run.status().to_owned(),
         duration_s: duration,
         samples: t.len() as u64,
         azimuth_quality: azimuth.quality.to_string(),
@@ -713,13 +714,13 @@ fn summarise(
         rolling_error_sigma_rad: rolling.and_then(|r| sd(r.mean_error)),
         roll_period_s: rolling.map(|r| r.roll_period_s).filter(|p| p.is_finite()),
         steps: u64_last(run, SOLVER_TOPIC, "steps")
-            .or_else(|| run.meta_f64("run", "steps").map(|v| v as u64)),
+            .or_else(|| result_f64("steps").map(|v| v as u64)),
         rejected_steps: u64_last(run, SOLVER_TOPIC, "rejected_steps"),
         rhs_evals: u64_last(run, SOLVER_TOPIC, "rhs_evals")
-            .or_else(|| run.meta_f64("run", "rhs_evals").map(|v| v as u64)),
+            .or_else(|| result_f64("rhs_evals").map(|v| v as u64)),
         jacobian_evals: u64_last(run, SOLVER_TOPIC, "jacobian_evals"),
         wall_time_s: f64_last(run, SOLVER_TOPIC, "wall_time_s")
-            .or_else(|| run.meta_f64("run", "wall_time_s")),
+            .or_else(|| result_f64("wall_time_s")),
         rhs_cost_ns: run.meta_f64("run", "rhs_cost_ns"),
     }
 }

@@ -243,6 +243,8 @@ pub fn record(
     w.write_metadata("bodies", &bodies_md).map_err(rec_err)?;
     w.write_metadata("design_constants", &design_constants(&sim, scene))
         .map_err(rec_err)?;
+    w.write_metadata("run", &run_metadata(&sim, scene, &coords, rhs_cost_ns))
+        .map_err(rec_err)?;
     w.attach(
         "scene.toml",
         "application/toml",
@@ -289,7 +291,7 @@ pub fn record(
     }
     let mut next_event = 0;
 
-    let pose_every = ((scene.output_rate_hz / scene.pose_rate_hz).round() as u64).max(1);
+    let pose_every = pose_every_n_samples(scene);
     let n_compass = 5 + 2 * coords.len();
     let mut compass_vals = vec![0.0; n_compass];
     let mut ship_vals = [0.0; 10];
@@ -464,47 +466,32 @@ pub fn record(
     )
     .map_err(rec_err)?;
     let effects = model.effects.names();
-    let mut run_md = BTreeMap::new();
+    let mut result_md = BTreeMap::new();
     let put = |m: &mut BTreeMap<String, String>, k: &str, v: String| {
         m.insert(k.to_string(), v);
     };
-    put(&mut run_md, "program_version", PROGRAM_VERSION.into());
-    put(&mut run_md, "scene_name", scene.name.clone());
-    put(&mut run_md, "design_name", model.design.name.clone());
-    put(&mut run_md, "design_kind", model.design.kind.clone());
-    put(&mut run_md, "fidelity", model.fidelity.to_string());
-    put(&mut run_md, "integrator", scene.method.to_string());
-    put(&mut run_md, "rtol", format!("{:e}", scene.tolerances.rtol));
-    put(&mut run_md, "atol", format!("{:e}", scene.tolerances.atol));
-    put(&mut run_md, "effects", effects.join(","));
-    put(&mut run_md, "coordinates", coords.join(","));
     put(
-        &mut run_md,
-        "output_rate_hz",
-        format!("{}", scene.output_rate_hz),
-    );
-    put(&mut run_md, "duration_s", format!("{}", scene.duration_s));
-    put(
-        &mut run_md,
-        "latitude_deg",
-        format!("{}", scene.start_latitude_rad.to_degrees()),
-    );
-    put(
-        &mut run_md,
+        &mut result_md,
         "status",
         match interrupted_at_s {
             Some(t) => format!("interrupted at t = {t} s"),
             None => "complete".into(),
         },
     );
-    put(&mut run_md, "rhs_cost_ns", format!("{rhs_cost_ns:.1}"));
-    put(&mut run_md, "steps", s.steps.to_string());
-    put(&mut run_md, "rejected_steps", s.rejected_steps.to_string());
-    put(&mut run_md, "rhs_evals", s.rhs_evals.to_string());
-    put(&mut run_md, "jacobian_evals", s.jacobian_evals.to_string());
-    put(&mut run_md, "wall_time_s", format!("{}", s.wall_time_s));
-    put(&mut run_md, "pose_every_n_samples", pose_every.to_string());
-    w.write_metadata("run", &run_md).map_err(rec_err)?;
+    put(&mut result_md, "steps", s.steps.to_string());
+    put(
+        &mut result_md,
+        "rejected_steps",
+        s.rejected_steps.to_string(),
+    );
+    put(&mut result_md, "rhs_evals", s.rhs_evals.to_string());
+    put(
+        &mut result_md,
+        "jacobian_evals",
+        s.jacobian_evals.to_string(),
+    );
+    put(&mut result_md, "wall_time_s", format!("{}", s.wall_time_s));
+    w.write_metadata("result", &result_md).map_err(rec_err)?;
     let summary = w.finish().map_err(rec_err)?;
     Ok(RecordSummary {
         path: summary.path,
@@ -516,6 +503,49 @@ pub fn record(
         interrupted_at_s,
         wall_time_s: started.elapsed().as_secs_f64(),
     })
+}
+
+/// Poses are written at every this many output samples (`pose_rate_hz` ≤ `output_rate_hz`).
+fn pose_every_n_samples(scene: &Scene) -> u64 {
+    ((scene.output_rate_hz / scene.pose_rate_hz).round() as u64).max(1)
+}
+
+/// The `run` metadata record: what was run and how, all known before the first step, so it is
+/// written at the start and a recovered file of a killed run keeps it. How the run ended goes to
+/// the `result` record, written at the end.
+fn run_metadata(
+    sim: &Simulation,
+    scene: &Scene,
+    coords: &[String],
+    rhs_cost_ns: f64,
+) -> BTreeMap<String, String> {
+    let model = &sim.model;
+    [
+        ("program_version", PROGRAM_VERSION.to_string()),
+        ("scene_name", scene.name.clone()),
+        ("design_name", model.design.name.clone()),
+        ("design_kind", model.design.kind.clone()),
+        ("fidelity", model.fidelity.to_string()),
+        ("integrator", scene.method.to_string()),
+        ("rtol", format!("{:e}", scene.tolerances.rtol)),
+        ("atol", format!("{:e}", scene.tolerances.atol)),
+        ("effects", model.effects.names().join(",")),
+        ("coordinates", coords.join(",")),
+        ("output_rate_hz", format!("{}", scene.output_rate_hz)),
+        ("duration_s", format!("{}", scene.duration_s)),
+        (
+            "latitude_deg",
+            format!("{}", scene.start_latitude_rad.to_degrees()),
+        ),
+        ("rhs_cost_ns", format!("{rhs_cost_ns:.1}")),
+        (
+            "pose_every_n_samples",
+            pose_every_n_samples(scene).to_string(),
+        ),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
 }
 
 enum OwnedValue {

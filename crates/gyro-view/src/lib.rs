@@ -290,7 +290,7 @@ fn log_about(
         m("run", "rtol"),
         m("run", "duration_s"),
         m("run", "output_rate_hz"),
-        m("run", "status"),
+        run.status(),
         m("run", "effects"),
         opts.tilt_exaggeration,
         opts.error_exaggeration,

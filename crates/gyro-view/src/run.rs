@@ -300,6 +300,13 @@ impl RunData {
     pub(crate) fn meta(&self, record: &str, key: &str) -> Option<&str> {
         self.metadata.get(record)?.get(key).map(String::as_str)
     }
+
+    /// How the run ended, read as `gyro_analysis::Run::status` reads it.
+    pub(crate) fn status(&self) -> &str {
+        self.meta("result", "status")
+            .or_else(|| self.meta("run", "status"))
+            .unwrap_or(gyro_analysis::RECOVERED_STATUS)
+    }
 }
 
 #[cfg(test)]
