@@ -107,7 +107,7 @@ fn run_then_inspect_and_analyze_in_json() {
 fn ctrl_c_leaves_a_valid_recording_and_exits_130() {
     let d = tmp("int");
     let file = d.join("long.mcap");
-    let mut child = gyrolab()
+    let child = gyrolab()
         .args([
             "run",
             "rolling-intercardinal",
@@ -117,6 +117,7 @@ fn ctrl_c_leaves_a_valid_recording_and_exits_130() {
             "-o",
         ])
         .arg(&file)
+        .stdout(std::process::Stdio::piped())
         .spawn()
         .expect("spawn");
     // Let it get going (it writes a .partial), then interrupt.
@@ -133,14 +134,20 @@ fn ctrl_c_leaves_a_valid_recording_and_exits_130() {
         .status()
         .expect("kill");
     assert!(ok.success());
-    let status = child.wait().expect("wait");
-    assert_eq!(status.code(), Some(130));
+    let out = child.wait_with_output().expect("wait");
+    assert_eq!(out.status.code(), Some(130));
+    // It says how far it got.
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        said.contains("interrupted at t = ") && said.contains("of 864000.0 s"),
+        "{said}"
+    );
     assert!(
         file.exists() && !partial.exists(),
         "final file written, partial renamed"
     );
     let rec = gyro_mcap::Recording::open(&file).expect("valid");
-    let status = &rec.metadata()["run"]["status"];
+    let status = &rec.metadata()["result"]["status"];
     assert!(status.starts_with("interrupted at t = "), "{status}");
     assert!(rec.read_records("/compass/state").expect("state").len() > 1);
 }
