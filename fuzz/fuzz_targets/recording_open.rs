@@ -1,4 +1,5 @@
-//! Any bytes, opened as a recording and every channel decoded: must give values or
+//! Any bytes, opened as a recording and every channel decoded, one at a time and all in one
+//! pass (`read_all` has its own fast paths and shares chunks among threads): must give values or
 //! `RecordingError`s, never a panic, hang or huge allocation.
 #![no_main]
 
@@ -20,5 +21,6 @@ fuzz_target!(|data: &[u8]| {
                 }
             }
         }
+        let _ = rec.read_all();
     }
 });
