@@ -126,9 +126,11 @@ pub(crate) struct RecordLayout {
 
 const MAX_INDEXED_NUMBER: i32 = 1 << 16;
 
-/// Rows (values, for record columns) reserved up front at most: counts come from an untrusted
-/// file's indexes (each row seen there is an index entry); beyond it vectors grow with the data.
-pub(crate) const MAX_RESERVED_ROWS: usize = 1 << 24;
+/// Values (8 bytes each) that the decoders of one read may reserve up front however small the
+/// file: counts come from an untrusted file's indexes, so reservations are bounded by this or by
+/// twice the file's bytes, whichever is larger (see `Recording::reserve_budget`); beyond it
+/// vectors grow with the data.
+pub(crate) const MAX_RESERVED_VALUES: usize = 1 << 24;
 
 impl RecordLayout {
     /// The layout of message `full_name` in an encoded FileDescriptorSet. Singular double, float,
@@ -243,10 +245,21 @@ impl RecordLayout {
         self.decode_into(data, columns)
     }
 
-    /// Empty columns with room for `n` rows, capped at [`MAX_RESERVED_ROWS`] values in all
-    /// (`n` comes from an untrusted file's indexes, and a schema may declare thousands of fields).
+    /// 8-byte words one row takes in the columns (the log time not counted; a string column's
+    /// `String` takes three before its text).
+    pub(crate) fn values_per_row(&self) -> usize {
+        self.decodings
+            .iter()
+            .map(|d| match d.empty_column() {
+                Column::Str(_) => 3,
+                Column::F64(_) | Column::U64(_) => 1,
+            })
+            .sum()
+    }
+
+    /// Empty columns with room for `n` rows (the caller bounds `n`: it comes from an untrusted
+    /// file's indexes, and a schema may declare thousands of fields).
     pub(crate) fn columns_with_capacity(&self, n: usize) -> Vec<Column> {
-        let n = n.min(MAX_RESERVED_ROWS / self.decodings.len().max(1));
         self.decodings
             .iter()
             .map(|d| match d.empty_column() {

@@ -5,7 +5,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use crate::decode::{Column, MAX_RESERVED_ROWS, RecordLayout, decode_pose};
+use crate::decode::{Column, MAX_RESERVED_VALUES, RecordLayout, decode_pose};
 use crate::error::{ParseError, RecordingError, io_error};
 use crate::format::{
     ChannelRecord, Cursor, FOOTER_RECORD_LEN, MAGIC, RawRecord, SchemaRecord, decompress_chunk, op,
@@ -799,15 +799,36 @@ impl Recording {
         Ok(())
     }
 
-    /// The decoder of one channel: records through the schema's layout, or poses.
-    fn decoder_for(&self, topic: &str) -> Result<(&ChannelRecord, Decoder), RecordingError> {
+    /// Values (8 bytes each) the decoders of one read may reserve up front, all channels
+    /// together: twice the file's bytes, at least [`MAX_RESERVED_VALUES`]. Sized for every row
+    /// of a channel, a decoder never moves what it holds as it fills; an untrusted file's counts
+    /// cannot make it reserve more than this.
+    fn reserve_budget(&self) -> usize {
+        MAX_RESERVED_VALUES.max(self.data.len() / 4)
+    }
+
+    /// The decoder of one channel: records through the schema's layout, or poses. Its rows are
+    /// reserved for the channel's message count, within what is left of `budget` (values).
+    fn decoder_for(
+        &self,
+        topic: &str,
+        budget: &mut usize,
+    ) -> Result<(&ChannelRecord, Decoder), RecordingError> {
         let (ch, schema) = self.channel_by_topic(topic)?;
-        let n = (self.stats.get(&ch.id).map_or(0, |s| s.count) as usize).min(MAX_RESERVED_ROWS);
+        let count = self.stats.get(&ch.id).map_or(0, |s| s.count);
+        let mut rows = |values_per_row: usize| {
+            let n = usize::try_from(count)
+                .unwrap_or(usize::MAX)
+                .min(*budget / values_per_row);
+            *budget -= n * values_per_row;
+            n
+        };
         let decoder = if schema.name == POSE_SCHEMA_NAME {
-            Decoder::Poses(PoseDecoder::with_capacity(n))
+            Decoder::Poses(PoseDecoder::with_capacity(rows(POSE_VALUES_PER_ROW)))
         } else {
             let layout = RecordLayout::from_descriptor_set(&schema.data, &schema.name)
                 .map_err(|e| self.schema_error(topic, e))?;
+            let n = rows(layout.values_per_row() + 1);
             let columns = layout.columns_with_capacity(n);
             Decoder::Records {
                 layout: Arc::new(layout),
@@ -823,9 +844,10 @@ impl Recording {
     /// channels come back as [`ChannelTable::Records`], `foxglove.FrameTransform` channels as
     /// [`ChannelTable::Poses`]; rows sorted by log time.
     pub fn read_topics(&self, topics: &[&str]) -> Result<Vec<ChannelTable>, RecordingError> {
+        let mut budget = self.reserve_budget();
         let wanted = topics
             .iter()
-            .map(|t| self.decoder_for(t))
+            .map(|t| self.decoder_for(t, &mut budget))
             .collect::<Result<Vec<_>, _>>()?;
         let mut seen = std::collections::HashSet::new();
         if let Some(dup) = topics.iter().find(|t| !seen.insert(**t)) {
@@ -855,7 +877,7 @@ impl Recording {
     /// FileDescriptorSet stored in the file (so files written by any version of a schema read
     /// back; fields missing in a message take their default). Rows are sorted by log time.
     pub fn read_records(&self, topic: &str) -> Result<RecordTable, RecordingError> {
-        let (ch, decoder) = self.decoder_for(topic)?;
+        let (ch, decoder) = self.decoder_for(topic, &mut self.reserve_budget())?;
         if matches!(decoder, Decoder::Poses(_)) {
             return Err(self.schema_error(
                 topic,
@@ -874,7 +896,7 @@ impl Recording {
 
     /// The poses of a `foxglove.FrameTransform` channel as columns, sorted by log time.
     pub fn read_poses(&self, topic: &str) -> Result<PoseTable, RecordingError> {
-        let (ch, decoder) = self.decoder_for(topic)?;
+        let (ch, decoder) = self.decoder_for(topic, &mut self.reserve_budget())?;
         if !matches!(decoder, Decoder::Poses(_)) {
             let (_, schema) = self.channel_by_topic(topic)?;
             return Err(self.schema_error(
@@ -1086,6 +1108,10 @@ struct PoseDecoder {
     /// scan of `table.frames` is faster).
     lookup: HashMap<Vec<u8>, u32>,
 }
+
+/// Values (8 bytes each) a pose row takes: log time, two frame indexes (4 bytes each),
+/// translation (3), rotation (4).
+const POSE_VALUES_PER_ROW: usize = 9;
 
 /// Distinct frame ids found by scanning; past this, through the hash map.
 const FRAME_SCAN: usize = 16;
