@@ -205,7 +205,7 @@ fn recover_into(
     tmp: &Path,
     defaults: WriterOptions,
 ) -> Result<(u64, u64, u64, Option<String>), RecordingError> {
-    let sink = Sink::create(tmp, defaults.chunk_size_bytes, defaults.zstd_level)?;
+    let sink = Sink::create(tmp, &defaults)?;
     let mut rec = Recoverer {
         sink,
         schema_ids: HashMap::new(),

@@ -35,6 +35,10 @@ pub struct WriterOptions {
     /// Wall-clock seconds after which an open chunk is closed and handed to the operating system,
     /// however small, so a killed process loses at most this much. Default 1.0.
     pub flush_interval_s: f64,
+    /// Bytes written between two writebacks to disk started while the file grows (on a thread
+    /// of their own, never waited for), so the sync at `finish` has little left. Default 32 MiB;
+    /// 0 leaves it all to `finish`.
+    pub sync_every_bytes: u64,
 }
 
 impl Default for WriterOptions {
@@ -43,6 +47,7 @@ impl Default for WriterOptions {
             chunk_size_bytes: 1 << 20,
             zstd_level: -4,
             flush_interval_s: 1.0,
+            sync_every_bytes: 32 << 20,
         }
     }
 }
@@ -168,6 +173,62 @@ struct FileSide {
     chunk_count: u32,
     attachment_count: u32,
     metadata_count: u32,
+    /// Writeback while the file grows (on the writer thread's side; none when inline).
+    syncer: Option<Syncer>,
+}
+
+/// Writeback while the file grows: after every `sync_every_bytes` the writer thread asks a
+/// syncing thread to `sync_data` a clone of the file handle, and never waits for it, so the
+/// durable sync in [`Sink::finish`] finds little left to write. (Without it that sync waited for
+/// the whole file: 0.2 s of the 0.7-s write of the 389-MB throughput bench.)
+struct Syncer {
+    ask: mpsc::SyncSender<()>,
+    thread: JoinHandle<std::io::Result<()>>,
+    unsynced: u64,
+    every: u64,
+}
+
+impl Syncer {
+    fn start(file: &File, every: u64) -> Option<Syncer> {
+        if every == 0 {
+            return None;
+        }
+        let clone = file.try_clone().ok()?;
+        let (ask, asked) = mpsc::sync_channel::<()>(1);
+        let thread = std::thread::Builder::new()
+            .name("gyro-mcap-sync".into())
+            .spawn(move || {
+                for () in asked {
+                    clone.sync_data()?;
+                }
+                Ok(())
+            })
+            .ok()?;
+        Some(Syncer {
+            ask,
+            thread,
+            unsynced: 0,
+            every,
+        })
+    }
+
+    fn wrote(&mut self, bytes: u64) {
+        self.unsynced += bytes;
+        if self.unsynced >= self.every {
+            // A request already queued covers these bytes when it runs: never wait.
+            let _ = self.ask.try_send(());
+            self.unsynced = 0;
+        }
+    }
+
+    /// Waits for the last writeback. Its error is reported here: the file handles share one
+    /// open file, so the final sync would not see an error this one has taken.
+    fn stop(self) -> std::io::Result<()> {
+        drop(self.ask);
+        self.thread
+            .join()
+            .unwrap_or_else(|_| Err(std::io::Error::other("the syncing thread panicked")))
+    }
 }
 
 impl FileSide {
@@ -266,7 +327,11 @@ impl FileSide {
         self.out
             .file
             .flush()
-            .map_err(io_error(&self.out.path, "flushing a chunk"))
+            .map_err(io_error(&self.out.path, "flushing a chunk"))?;
+        if let Some(s) = &mut self.syncer {
+            s.wrote(self.out.pos - chunk_start);
+        }
+        Ok(())
     }
 }
 
@@ -304,10 +369,12 @@ fn compressing_threads() -> usize {
 }
 
 fn spawn_workers(
-    side: Box<FileSide>,
-    zstd_level: i32,
+    mut side: Box<FileSide>,
+    opts: &WriterOptions,
     path: &Path,
 ) -> Result<Workers, Box<FileSide>> {
+    let zstd_level = opts.zstd_level;
+    side.syncer = Syncer::start(side.out.file.get_ref(), opts.sync_every_bytes);
     let k = compressing_threads();
     let failed = Arc::new(AtomicBool::new(false));
     let mut inputs = Vec::with_capacity(k);
@@ -428,11 +495,8 @@ pub(crate) struct Sink {
 }
 
 impl Sink {
-    pub(crate) fn create(
-        path: &Path,
-        chunk_size: u64,
-        zstd_level: i32,
-    ) -> Result<Self, RecordingError> {
+    pub(crate) fn create(path: &Path, opts: &WriterOptions) -> Result<Self, RecordingError> {
+        let (chunk_size, zstd_level) = (opts.chunk_size_bytes, opts.zstd_level);
         let file = File::create(path).map_err(io_error(path, "creating"))?;
         let compressor =
             compressor(zstd_level).map_err(io_error(path, "setting up zstd compression"))?;
@@ -450,8 +514,9 @@ impl Sink {
             chunk_count: 0,
             attachment_count: 0,
             metadata_count: 0,
+            syncer: None,
         });
-        let file = match spawn_workers(side, zstd_level, path) {
+        let file = match spawn_workers(side, opts, path) {
             Ok(workers) => FileHandle::Workers(workers),
             Err(side) => FileHandle::Inline { side, compressor },
         };
@@ -790,6 +855,10 @@ impl Sink {
     pub(crate) fn finish(&mut self) -> Result<u64, RecordingError> {
         self.close_chunk()?;
         let mut side = self.join()?;
+        if let Some(s) = side.syncer.take() {
+            s.stop()
+                .map_err(io_error(&side.out.path, "syncing to disk"))?;
+        }
         let out = &mut side.out;
         let data_crc = out.crc.clone().finalize();
         let mut b = Vec::new();
@@ -923,7 +992,7 @@ impl RecordingWriter {
     /// Opens `<final_path>.partial` for writing; `finish` renames it to `final_path`.
     pub fn create(final_path: &Path, opts: WriterOptions) -> Result<Self, RecordingError> {
         let partial = partial_path(final_path);
-        let sink = Sink::create(&partial, opts.chunk_size_bytes, opts.zstd_level)?;
+        let sink = Sink::create(&partial, &opts)?;
         Ok(Self {
             sink,
             final_path: final_path.to_path_buf(),
