@@ -1,19 +1,14 @@
 //! The command line as a user meets it: exit codes, JSON output, Ctrl-C, and the regression
 //! check against the committed baseline (what CI runs on a small, fast scene set).
 
+mod common;
+use common::gyrolab;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn gyrolab() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_gyrolab"));
-    c.current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
-    c
-}
-
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gyrolab-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).expect("tmp");
-    d
+    common::tmp("cli", name)
 }
 
 #[test]

@@ -2,23 +2,18 @@
 //! recover` salvages its `.partial` file, and what comes back is a valid recording whose every
 //! message equals, byte for byte, the same message of an uninterrupted run of the same scene.
 
+mod common;
+use common::gyrolab;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use gyro_mcap::{Column, Recording};
 
-fn gyrolab() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_gyrolab"));
-    c.current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
-    c
-}
-
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gyrolab-kill-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).expect("tmp");
-    d
+    common::tmp("kill", name)
 }
 
 /// Every message of a file, per topic, as the reference `mcap` reader gives it (it checks every
