@@ -466,31 +466,21 @@ pub fn record(
     )
     .map_err(rec_err)?;
     let effects = model.effects.names();
-    let mut result_md = BTreeMap::new();
-    let put = |m: &mut BTreeMap<String, String>, k: &str, v: String| {
-        m.insert(k.to_string(), v);
+    let status = match interrupted_at_s {
+        Some(t) => format!("interrupted at t = {t} s"),
+        None => "complete".into(),
     };
-    put(
-        &mut result_md,
-        "status",
-        match interrupted_at_s {
-            Some(t) => format!("interrupted at t = {t} s"),
-            None => "complete".into(),
-        },
-    );
-    put(&mut result_md, "steps", s.steps.to_string());
-    put(
-        &mut result_md,
-        "rejected_steps",
-        s.rejected_steps.to_string(),
-    );
-    put(&mut result_md, "rhs_evals", s.rhs_evals.to_string());
-    put(
-        &mut result_md,
-        "jacobian_evals",
-        s.jacobian_evals.to_string(),
-    );
-    put(&mut result_md, "wall_time_s", format!("{}", s.wall_time_s));
+    let result_md: BTreeMap<String, String> = [
+        ("status", status),
+        ("steps", s.steps.to_string()),
+        ("rejected_steps", s.rejected_steps.to_string()),
+        ("rhs_evals", s.rhs_evals.to_string()),
+        ("jacobian_evals", s.jacobian_evals.to_string()),
+        ("wall_time_s", format!("{}", s.wall_time_s)),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
     w.write_metadata("result", &result_md).map_err(rec_err)?;
     let summary = w.finish().map_err(rec_err)?;
     Ok(RecordSummary {
