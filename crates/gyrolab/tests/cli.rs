@@ -2,7 +2,7 @@
 //! check against the committed baseline (what CI runs on a small, fast scene set).
 
 mod common;
-use common::gyrolab;
+use common::{gyrolab, succeed};
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -49,15 +49,10 @@ fn bad_input_exits_2_with_a_message_naming_the_file() {
 fn run_then_inspect_and_analyze_in_json() {
     let d = tmp("run");
     let file = d.join("h.mcap");
-    let out = gyrolab()
-        .args(["run", "harbour-50n", "--json", "--duration-s", "7200", "-o"])
-        .arg(&file)
-        .output()
-        .expect("runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = succeed(
+        gyrolab()
+            .args(["run", "harbour-50n", "--json", "--duration-s", "7200", "-o"])
+            .arg(&file),
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
     assert_eq!(
@@ -86,16 +81,7 @@ fn run_then_inspect_and_analyze_in_json() {
     ] {
         assert!(topics.contains(&t), "{t} missing: {topics:?}");
     }
-    let out = gyrolab()
-        .args(["analyze", "--json"])
-        .arg(&file)
-        .output()
-        .expect("runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeed(gyrolab().args(["analyze", "--json"]).arg(&file));
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! message equals, byte for byte, the same message of an uninterrupted run of the same scene.
 
 mod common;
-use common::gyrolab;
+use common::{gyrolab, succeed};
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -75,16 +75,7 @@ fn a_run_killed_with_sigkill_recovers_to_a_prefix_of_the_uninterrupted_run() {
     child.wait().expect("wait");
     assert!(!killed.exists(), "nothing under the final name");
 
-    let out = gyrolab()
-        .args(["recover", "--json"])
-        .arg(&partial)
-        .output()
-        .expect("recover");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = succeed(gyrolab().args(["recover", "--json"]).arg(&partial));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
     assert!(report["chunks"].as_u64().expect("chunks") >= 2, "{report}");
     assert!(partial.exists(), "the .partial file is left as it was");
@@ -159,16 +150,7 @@ fn a_run_killed_with_sigkill_recovers_to_a_prefix_of_the_uninterrupted_run() {
     }
 
     // The analysis reads the salvaged run and says what it is.
-    let out = gyrolab()
-        .args(["analyze", "--json"])
-        .arg(&killed)
-        .output()
-        .expect("analyze");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = succeed(gyrolab().args(["analyze", "--json"]).arg(&killed));
     let said = String::from_utf8_lossy(&out.stdout);
     assert!(said.contains("recovered from a killed run"), "{said}");
     eprintln!(
