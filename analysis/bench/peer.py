@@ -10,7 +10,7 @@ Cases (parameters read from gyrolab's own output, so both sides solve the same p
   numbers, 1 hour; exact solution by scipy.linalg.expm (independent of gyrolab's). Error: max over
   minutes of |dzeta|, |dtheta| over the 2 deg release.
 
-gyrolab's side runs as `cargo test --release -p gyro-sim --test accuracy peer_side -- --ignored`
+gyrolab's side runs as `cargo test --release -p gyro-sim --test integration accuracy::peer_side -- --ignored`
 (env PEER_OUT=<json>). Ratios are taken at matched error: for a target error E, each side's cost
 is the least wall time of any of its runs whose achieved error is <= E.
 
@@ -48,8 +48,8 @@ def gyrolab_side(skip):
     env = dict(os.environ, PEER_OUT=out)
     env.setdefault("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
     subprocess.run(
-        ["cargo", "test", "--release", "-q", "-p", "gyro-sim", "--test", "accuracy",
-         "peer_side", "--", "--ignored", "--exact"],
+        ["cargo", "test", "--release", "-q", "-p", "gyro-sim", "--test", "integration",
+         "accuracy::peer_side", "--", "--ignored", "--exact"],
         cwd=ROOT, env=env, check=True, stdout=subprocess.DEVNULL)
     with open(out) as f:
         return json.load(f)

@@ -1,7 +1,7 @@
 //! Bad input gives clear messages naming the file and channel, never a panic.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use common::{Spec, damped, temp_dir, write_run};
 use gyro_analysis::{AnalysisError, AnalysisOptions, Quality, analyze_run, analyze_runs};

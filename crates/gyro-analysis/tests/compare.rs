@@ -1,7 +1,7 @@
 //! Comparison of designs: side-by-side table (terminal and Markdown) and the overlay plot.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use common::{Spec, damped, temp_dir, write_run};
 use gyro_analysis::compare;

@@ -2,7 +2,7 @@
 //! data allow it, an honest uncertainty everywhere, and a refusal where they do not.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use std::f64::consts::PI;
 

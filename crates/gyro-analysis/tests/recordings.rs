@@ -2,7 +2,7 @@
 //! to end: loading, fits, ballistic deviation, rolling error, the metrics table and its files.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use std::f64::consts::PI;
 

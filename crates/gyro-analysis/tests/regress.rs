@@ -2,7 +2,7 @@
 //! tolerance fails and is named; a changed quality flag or a missing run fails too.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 
 use common::{Spec, damped, temp_dir, write_run};
 use gyro_analysis::regress::{Status, default_tolerances};

@@ -1,7 +1,7 @@
 //! Interop: the reference Python MCAP libraries decode every channel of our recordings.
 //! Creates a venv under the target dir (`pip install mcap mcap-protobuf-support protobuf`) once.
 #![allow(clippy::unwrap_used)]
-mod common;
+use crate::common;
 
 use std::collections::HashMap;
 use std::path::PathBuf;

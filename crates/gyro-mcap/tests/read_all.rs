@@ -2,7 +2,7 @@
 //! them one by one gives, on a file of many chunks (shared out among threads where there are
 //! several cores), and the stream that was written.
 #![allow(clippy::unwrap_used)]
-mod common;
+use crate::common;
 
 use common::*;
 use gyro_mcap::{

@@ -1,5 +1,5 @@
 #![allow(clippy::unwrap_used)]
-mod common;
+use crate::common;
 
 use common::*;
 use gyro_mcap::{ChannelKind, Recording, WriterOptions};

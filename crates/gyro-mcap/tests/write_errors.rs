@@ -3,7 +3,7 @@
 //! the file, and no call panics or hangs.
 #![allow(clippy::unwrap_used)]
 #![cfg(target_os = "linux")]
-mod common;
+use crate::common;
 
 use common::*;
 use gyro_mcap::{RecordingError, WriterOptions, partial_path};

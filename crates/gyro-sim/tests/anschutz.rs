@@ -1,7 +1,7 @@
 //! Anschütz 1906 simulated by the engine against Beghin's closed forms (ch. III), computed here
 //! from the design's own parameters.
 
-mod support;
+use crate::support;
 use gyro_model::constants::EARTH_RATE_RAD_PER_S;
 use gyro_model::theory::Anschutz;
 use gyro_model::{Design, Fidelity};

@@ -1,7 +1,6 @@
 //! Malformed or out-of-range scenes and designs fail with an error naming the file, the line,
 //! the key and what is allowed — never a panic.
 
-mod support;
 use gyro_model::Design;
 use gyro_sim::{Scene, SceneOverrides};
 

@@ -9,7 +9,7 @@
 //! - without a motor (or with the effect disabled) no motor state is compiled and the run is
 //!   bit-for-bit the held-spin run.
 
-mod support;
+use crate::support;
 use gyro_model::constants::{EARTH_RATE_RAD_PER_S, STANDARD_GRAVITY_M_PER_S2};
 use gyro_sim::solvers::Method;
 use gyro_sim::{SceneOverrides, Simulation};

@@ -2,9 +2,9 @@
 //! numbers stay finite. The pole, latitude 89.9°, the separatrix of Villarceau's pendulum, a stiff
 //! `full` model over a day, a month without damping, zero and near-aperiodic damping, designs
 //! whose SI numbers span twelve orders of magnitude, and a vehicle that cancels the Earth's
-//! surface speed. Run: `cargo test --release -p gyro-sim --test hard_cases` (≈ 1 min here).
+//! surface speed. Run: `cargo test --release -p gyro-sim --test integration hard_cases::` (≈ 1 min here).
 
-mod support;
+use crate::support;
 use gyro_model::constants::{EARTH_RADIUS_M, EARTH_RATE_RAD_PER_S, KNOT_IN_M_PER_S};
 use gyro_model::theory::Anschutz;
 use gyro_model::{Design, Fidelity};

@@ -1,7 +1,7 @@
 //! The ship's motion: speed error (Beghin §30), Schuler tuning against a 20-kn speed change
 //! (§35), the quadrantal error under rolling (§40), and "absent effects cost nothing".
 
-mod support;
+use crate::support;
 use gyro_model::constants::{
     EARTH_RADIUS_M, EARTH_RATE_RAD_PER_S, KNOT_IN_M_PER_S, STANDARD_GRAVITY_M_PER_S2,
 };

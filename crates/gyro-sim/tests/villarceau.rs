@@ -2,7 +2,7 @@
 //! (quadrature of eq. 47, with δ) at small, large and near-separatrix amplitude, the first
 //! integral over 100 periods, and the reversed spin oscillating about γ = π.
 
-mod support;
+use crate::support;
 use gyro_model::theory::{Villarceau, foucault_villarceau};
 use gyro_sim::solvers::{Method, OutputGrid};
 use gyro_sim::{SceneOverrides, Simulation};

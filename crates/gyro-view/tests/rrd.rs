@@ -3,7 +3,7 @@
 //! directory) and holds the expected entity paths, a transform for every body at every kept
 //! sample, and the scalar series with the right lengths and values.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

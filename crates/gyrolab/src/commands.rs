@@ -437,10 +437,20 @@ pub fn analyze(runs: &[String], json: bool, table: Option<&Path>) -> Result<Exit
     Ok(ExitCode::SUCCESS)
 }
 
-pub fn compare(runs: &[String], out: &Path, markdown: bool) -> Result<ExitCode, CliError> {
+pub fn compare(
+    runs: &[String],
+    out: &Path,
+    markdown: bool,
+    json: bool,
+) -> Result<ExitCode, CliError> {
     std::fs::create_dir_all(out)
         .map_err(|e| failed(format!("cannot create {}: {e}", out.display())))?;
     let r = gyro_analysis::compare(runs, out).map_err(bad)?;
+    if json {
+        // The metrics table (one row per run) and the plots' paths.
+        println!("{}", serde_json::to_string_pretty(&r).map_err(failed)?);
+        return Ok(ExitCode::SUCCESS);
+    }
     println!(
         "{}",
         if markdown {

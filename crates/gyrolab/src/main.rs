@@ -77,8 +77,11 @@ enum Command {
         #[arg(long, default_value = "analysis/compare")]
         out: PathBuf,
         /// Print Markdown instead of the terminal table.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "json")]
         markdown: bool,
+        /// Print the metrics table and the plots' paths as JSON.
+        #[arg(long)]
+        json: bool,
     },
     /// Show recordings in Rerun: gimbals posed in 3-D, series of reading error, tilt, heading,
     /// speed and roll, manoeuvre events and the fitted envelope. Spawns the viewer when one is
@@ -158,7 +161,8 @@ fn main() -> ExitCode {
             runs,
             out,
             markdown,
-        } => commands::compare(&runs, &out, markdown),
+            json,
+        } => commands::compare(&runs, &out, markdown, json),
         Command::View {
             runs,
             save,

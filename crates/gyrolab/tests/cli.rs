@@ -1,7 +1,7 @@
 //! The command line as a user meets it: exit codes, JSON output, Ctrl-C, and the regression
 //! check against the committed baseline (what CI runs on a small, fast scene set).
 
-mod common;
+use crate::common;
 use common::{gyrolab, succeed};
 
 use std::path::{Path, PathBuf};
@@ -265,4 +265,57 @@ fn a_design_parameter_moved_by_5_percent_fails_regress_and_names_the_metric() {
         text.contains("period_s") && text.contains("harbour-50n/anschutz-1906"),
         "{text}"
     );
+}
+
+/// The README says every command takes `--json`: each subcommand's help lists it.
+#[test]
+fn every_subcommand_takes_json() {
+    let help = String::from_utf8_lossy(&succeed(gyrolab().arg("help")).stdout).into_owned();
+    // clap's help lists subcommands under "Commands:", two spaces in, up to the next blank line.
+    let subcommands: Vec<String> = help
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| !l.trim().is_empty())
+        .filter_map(|l| l.split_whitespace().next().map(str::to_owned))
+        .filter(|s| s != "help")
+        .collect();
+    assert!(subcommands.len() >= 10, "{help}");
+    for sub in &subcommands {
+        let out = succeed(gyrolab().args([sub.as_str(), "--help"]));
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.contains("--json"), "`gyrolab {sub}` has no --json:\n{text}");
+    }
+}
+
+#[test]
+fn compare_in_json_gives_one_row_per_run_and_the_plots() {
+    let d = tmp("compare-json");
+    let mut files = Vec::new();
+    for (name, stem) in [("harbour-50n", "a"), ("harbour-50n", "b")] {
+        let file = d.join(format!("{stem}.mcap"));
+        succeed(
+            gyrolab()
+                .args(["run", name, "--quiet", "-o"])
+                .arg(&file),
+        );
+        files.push(file);
+    }
+    let out = succeed(
+        gyrolab()
+            .args(["compare", "--json", "--out"])
+            .arg(d.join("plots"))
+            .args(&files),
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    let svg = v["plot_svg"].as_str().expect("plot_svg");
+    assert!(Path::new(svg).exists(), "{svg}");
+    let rows = v["table"]["rows"].as_array().expect("rows");
+    assert_eq!(rows.len(), 2, "{v}");
+    for (row, file) in rows.iter().zip(&files) {
+        assert_eq!(row["path"].as_str(), Some(file.to_str().expect("utf-8")), "{row}");
+        assert_eq!(row["scene"], "harbour-50n", "{row}");
+        let period = row["period_s"].as_f64().expect("a fitted period");
+        assert!((4000.0..5000.0).contains(&period), "{row}");
+    }
 }

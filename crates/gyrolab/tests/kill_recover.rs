@@ -2,7 +2,7 @@
 //! recover` salvages its `.partial` file, and what comes back is a valid recording whose every
 //! message equals, byte for byte, the same message of an uninterrupted run of the same scene.
 
-mod common;
+use crate::common;
 use common::{gyrolab, succeed};
 
 use std::collections::BTreeMap;

@@ -2,7 +2,7 @@
 //! recorded to MCAP (`gyro_sim::record`), the recording's share of the wall time, its cost per
 //! output sample, and the per-sample cost of each model call the recorder makes.
 //!
-//! `cargo run --release -p gyro-sim --example record_overhead -- [SCENE] [DURATION_S] [RATE_HZ]`
+//! `cargo bench -p gyro-sim --bench record_overhead -- [SCENE] [DURATION_S] [RATE_HZ]`
 //! (default: harbour-50n for 86400 s at the scene's own output rate). Times are the best of
 //! `GYRO_REPEATS` (default 3) runs, to see through a shared machine's noise.
 
@@ -43,7 +43,8 @@ fn cpu_s() -> f64 {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    // `cargo bench` appends `--bench`; the tool takes positional arguments only.
+    let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
     let name = args.first().map_or("harbour-50n", String::as_str);
     let duration_s: f64 = args.get(1).map_or(Ok(86400.0), |s| s.parse())?;
     let rate_hz: Option<f64> = args.get(2).map(|s| s.parse()).transpose()?;

@@ -2,7 +2,9 @@
 //! counting instructions and cycles with `perf stat`, which busy machines disturb far less than
 //! wall time:
 //!
-//! `perf stat -e instructions:u,cycles:u target/release/examples/rhs_loop anschutz-1906 full rhs 1000000`
+//! `cargo bench -p gyro-model --bench rhs_loop -- anschutz-1906 full rhs 1000000`, or under
+//! `perf stat -e instructions:u,cycles:u` on the executable `cargo bench -p gyro-model --bench
+//! rhs_loop --no-run` names (a bench target, so `cargo test` does not build it).
 
 use gyro_model::{
     BaseEffects, CompiledModel, Design, Effects, Fidelity, InitialCondition, ModelOptions, Moored,
@@ -10,7 +12,8 @@ use gyro_model::{
 use std::hint::black_box;
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
+    // `cargo bench` appends `--bench`; the tool takes positional arguments only.
+    let args: Vec<String> = std::env::args().filter(|a| a != "--bench").collect();
     if args.len() != 5 {
         eprintln!("usage: rhs_loop DESIGN full|gyroscopic rhs|jacobian COUNT");
         std::process::exit(2);

@@ -1,0 +1,11 @@
+//! gyro-mcap's integration tests, one module per file, linked into one test binary: one
+//! link of the crate's dependency tree instead of one per file. Run one file's tests with
+//! `cargo test --release -p gyro-mcap --test integration FILE::`.
+
+mod common;
+
+mod interop_python;
+mod read_all;
+mod recover;
+mod round_trip;
+mod write_errors;

@@ -1,0 +1,20 @@
+//! gyro-sim's integration tests, one module per file, linked into one test binary: one
+//! link of the crate's dependency tree instead of one per file. Run one file's tests with
+//! `cargo test --release -p gyro-sim --test integration FILE::`.
+
+mod support;
+
+mod accuracy;
+mod anschutz;
+mod bad_input;
+mod effects_motor;
+mod hard_cases;
+mod interop_recording;
+mod perf_cost;
+mod perf_engine;
+mod perf_modes;
+mod record_stats;
+mod ship;
+mod solvers;
+mod solvers_alloc;
+mod villarceau;

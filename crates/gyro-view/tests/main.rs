@@ -1,0 +1,7 @@
+//! gyro-view's integration tests, one module per file, linked into one test binary: one
+//! link of the crate's dependency tree instead of one per file. Run one file's tests with
+//! `cargo test --release -p gyro-view --test integration FILE::`.
+
+mod common;
+
+mod rrd;
