@@ -1,4 +1,5 @@
-//! `gyrolab view` until the CLI wires it: `cargo run --release -p gyro-view --example view --
+//! The viewer without the CLI (what `gyrolab view` does, with the library's options):
+//! `cargo run --release -p gyro-view --example view --
 //! [--save FILE.rrd | --connect URL] [--tilt K] [--error K] [--pose-rate HZ] RUN.mcap…`
 //! (spawns the viewer by default). Prints the report.
 
