@@ -6,9 +6,11 @@
 //! holds against a reviewed baseline. Every estimate carries its 1-σ uncertainty and a quality
 //! flag; a fit the data do not allow is refused with a reason, never guessed.
 //!
-//! It reads recordings only through `gyro-mcap` and the contract of `docs/recordings.md`; it
-//! knows nothing of how a run was simulated (no dependency on gyro-model or gyro-sim) nor of
-//! the command line, which calls the entry points below.
+//! It reads recordings only through `gyro-mcap` and the contract of `docs/recordings.md`. From
+//! `gyro-model` it takes only physical constants and closed forms (the Schuler period and the
+//! speed error a manoeuvre's deviation is judged against, re-exported by [`ballistic`]), never
+//! the engines or a compiled model: it knows nothing of how a run was simulated (no dependency
+//! on gyro-sim) nor of the command line, which calls the entry points below.
 //!
 //! # Entry points
 //! - [`analyze_runs`] / [`analyze_run`]: recordings → [`MetricsTable`] / [`RunAnalysis`]
@@ -22,7 +24,8 @@
 //! - [`load`]: recordings → DataFrames; [`fit`]: damped sinusoid by Levenberg–Marquardt;
 //!   [`steady`]: settled value and drift; [`ballistic`]: deviation after manoeuvres;
 //!   [`rolling`]: mean error under rolling; [`metrics`]: per-run analysis and the table;
-//!   [`compare`], [`regress`], [`plot`].
+//!   [`compare`]: runs side by side; [`regress`]: the baseline check; [`plot`]: line plots as
+//!   SVG and PNG (also used by `gyrolab accuracy`); [`error`]: the crate's one error type.
 //!
 //! Units are SI inside (s, rad); renderers for people show minutes and degrees.
 

@@ -1,7 +1,7 @@
 //! The engine alone (no scene, no ship program): one right-hand side and one exact Jacobian of
 //! the shipped designs moored at 50°N, per fidelity, by the body-axes engine the model uses and
-//! by the world-axes reference engine it replaced (`rhs_reference`; its Jacobian column by
-//! column on nested duals, as it was computed before), so the gain stays measurable.
+//! by the world-axes reference engine (`rhs_reference`; its Jacobian column by column on nested
+//! duals), so what the body-axes engine saves stays measurable.
 //!
 //! `cargo bench -p gyro-model --bench rhs`
 

@@ -733,9 +733,9 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
     }
 
-    /// ẋ by the world-axes reference engine, as the model computed it before the body-axes
-    /// engine: kept so tests can hold [`CompiledModel::rhs`] to it (nested duals give its
-    /// Jacobian). Generic so that nothing instantiates it unless a test calls it.
+    /// ẋ by the world-axes reference engine, an independent derivation of the same equations:
+    /// tests hold [`CompiledModel::rhs`] (the body-axes engine) to it, and nested duals give its
+    /// Jacobian. Generic so that nothing instantiates it unless a test calls it.
     pub fn rhs_reference<T: Real>(&self, fidelity: Fidelity, t: T, x: &[T], dx: &mut [T]) -> bool {
         const MX: usize = MAX_COORDINATES + 1;
         let ni = self.independent.len();

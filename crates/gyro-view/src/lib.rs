@@ -23,6 +23,11 @@
 //! moved into an arrow buffer. Poses are decimated for display ([`ViewOptions::max_pose_rate_hz`],
 //! [`ViewOptions::max_pose_samples`]).
 //!
+//! # Layout
+//! [`blueprint`] puts the 3-D view (the manoeuvre log under it) beside the stacked series;
+//! [`send_layout`] sends it with every time-series view opening on the whole run (Rerun's own
+//! default for a plot over more than a minute is the time cursor ± 30 s).
+//!
 //! # Small angles
 //! [`ViewOptions::tilt_exaggeration`] multiplies every body's tilt from the local vertical (and
 //! the apparent vertical's) in the 3-D view, keeping azimuths; the view's title says so.
@@ -160,6 +165,9 @@ rerun_error!(
     rerun::sink::FileSinkError,
     rerun::sink::SinkFlushError
 );
+
+/// The application id of every stream gyro-view opens.
+const APPLICATION_ID: &str = "gyrolab";
 
 /// The timeline every entity is logged on.
 pub const TIMELINE: &str = "sim_time";
@@ -304,8 +312,16 @@ fn log_about(
     Ok(())
 }
 
+/// What [`blueprint`] lays out: the blueprint, and the blueprint paths of its time-series views
+/// (each opens on the whole run when the layout is sent, see [`send_layout`]).
+pub struct Layout {
+    pub blueprint: Blueprint,
+    /// `view/<id>` of every time-series view.
+    pub time_series_views: Vec<String>,
+}
+
 /// The layout: the 3-D view (with the events log under it) beside the stacked time series.
-pub fn blueprint(run_roots: &[String], opts: &ViewOptions) -> Blueprint {
+pub fn blueprint(run_roots: &[String], opts: &ViewOptions) -> Layout {
     let each = |suffix: &str| -> Vec<String> {
         run_roots
             .iter()
@@ -329,26 +345,87 @@ pub fn blueprint(run_roots: &[String], opts: &ViewOptions) -> Blueprint {
             .into(),
     ])
     .with_row_shares([4.0, 1.0]);
-    let right = Vertical::new(
-        series::SERIES_VIEWS
-            .iter()
-            .map(|(name, leaf)| -> ContainerLike {
-                TimeSeriesView::new(*name)
-                    .with_contents(each(&format!("series/{leaf}")))
-                    .with_origin("/")
-                    .into()
-            }),
-    );
+    let mut time_series_views = Vec::with_capacity(series::SERIES_VIEWS.len());
+    let series: Vec<ContainerLike> = series::SERIES_VIEWS
+        .iter()
+        .map(|(name, leaf)| {
+            let view: ContainerLike = TimeSeriesView::new(*name)
+                .with_contents(each(&format!("series/{leaf}")))
+                .with_origin("/")
+                .into();
+            if let ContainerLike::View(v) = &view {
+                time_series_views.push(v.blueprint_path().to_string());
+            }
+            view
+        })
+        .collect();
+    let right = Vertical::new(series);
     use rerun::blueprint::components::{PanelState, PlayState};
-    Blueprint::new(Horizontal::new([left.into(), right.into()]).with_column_shares([1.1, 1.0]))
-        .with_blueprint_panel(BlueprintPanel::new().with_state(PanelState::Collapsed))
-        .with_selection_panel(SelectionPanel::new().with_state(PanelState::Collapsed))
-        .with_time_panel(
-            TimePanel::new()
-                .with_state(PanelState::Collapsed)
-                .with_timeline(TIMELINE)
-                .with_play_state(PlayState::Following),
-        )
+    let blueprint =
+        Blueprint::new(Horizontal::new([left.into(), right.into()]).with_column_shares([1.1, 1.0]))
+            .with_blueprint_panel(BlueprintPanel::new().with_state(PanelState::Collapsed))
+            .with_selection_panel(SelectionPanel::new().with_state(PanelState::Collapsed))
+            .with_time_panel(
+                TimePanel::new()
+                    .with_state(PanelState::Collapsed)
+                    .with_timeline(TIMELINE)
+                    .with_play_state(PlayState::Following),
+            );
+    Layout {
+        blueprint,
+        time_series_views,
+    }
+}
+
+/// Sends the layout to `rec`, every time-series view opening on the whole run.
+///
+/// Why not the plain `Blueprint::send`: without a `TimeAxis.view_range`, Rerun 0.36 shows a plot
+/// whose data span more than a minute as the time cursor ± 30 s (the view's fallback, chosen for
+/// hours-long robot logs), so a five-hour settling curve opens as a flat line at its end. The
+/// Rust blueprint builder has no setter for a time-series view's properties, so the blueprint is
+/// rendered into memory, a `TimeAxis` over everything is added to the same blueprint store for
+/// each series view, and the whole is sent with the blueprint's own activation command.
+pub fn send_layout(rec: &RecordingStream, layout: &Layout) -> Result<(), ViewError> {
+    use rerun::external::re_log_types::LogMsg;
+    use rerun::external::re_sdk_types::blueprint::archetypes::TimeAxis;
+    use rerun::external::re_sdk_types::datatypes::TimeRange;
+    let (capture, storage) = RecordingStreamBuilder::new(APPLICATION_ID)
+        .default_enabled(true)
+        .memory()?;
+    layout
+        .blueprint
+        .send(&capture, rerun::blueprint::BlueprintActivation::default())?;
+    let mut msgs = Vec::new();
+    let mut activation = None;
+    for msg in storage.take() {
+        match msg {
+            LogMsg::BlueprintActivationCommand(cmd) => activation = Some(cmd),
+            msg if msg.store_id().is_blueprint() => msgs.push(msg),
+            _ => {}
+        }
+    }
+    let activation = activation
+        .ok_or_else(|| ViewError::Rerun("the blueprint came without activation".into()))?;
+    let (props, props_storage) = RecordingStreamBuilder::new(APPLICATION_ID)
+        .default_enabled(true)
+        .recording_id(activation.blueprint_id.recording_id().clone())
+        .blueprint()
+        .memory()?;
+    props.set_time_sequence("blueprint", 0);
+    for view in &layout.time_series_views {
+        props.log(
+            format!("{view}/TimeAxis"),
+            &TimeAxis::new().with_view_range(TimeRange::EVERYTHING),
+        )?;
+    }
+    msgs.extend(
+        props_storage
+            .take()
+            .into_iter()
+            .filter(|m| matches!(m, LogMsg::ArrowMsg(..))),
+    );
+    rec.send_blueprint(msgs, activation);
+    Ok(())
 }
 
 /// The first `rerun` executable on `PATH`.
@@ -379,7 +456,7 @@ pub fn view_with_fit(
     check(opts)?;
     let first = runs.first().ok_or(ViewError::NoRuns)?;
     let mut notes = Vec::new();
-    let builder = RecordingStreamBuilder::new("gyrolab").default_enabled(true);
+    let builder = RecordingStreamBuilder::new(APPLICATION_ID).default_enabled(true);
     let (rec, output) = match &opts.sink {
         Sink::Save(path) => (
             builder.save(path)?,
@@ -414,7 +491,7 @@ pub fn view_with_fit(
     let summaries = log_runs(&rec, runs, opts, fit)?;
     if opts.blueprint {
         let roots: Vec<String> = summaries.iter().map(|s| s.entity.clone()).collect();
-        blueprint(&roots, opts).send(&rec, rerun::blueprint::BlueprintActivation::default())?;
+        send_layout(&rec, &blueprint(&roots, opts))?;
     }
     rec.flush_blocking()?;
     drop(rec);

@@ -176,6 +176,23 @@ fn rrd_holds_bodies_poses_and_series_of_two_runs() {
     let d = dump(&py, &rrd);
     assert_eq!(d["recordings"], 1);
     assert_eq!(d["blueprints"], 1, "the layout travels in the file");
+    // The five time-series views open on the whole run: without a `TimeAxis.view_range`, Rerun
+    // shows a plot over more than a minute (this one is 600 s) as the time cursor ± 30 s.
+    let time_axes: Vec<&String> = d["blueprint_entities"]
+        .as_object()
+        .expect("blueprint entities")
+        .iter()
+        .filter(|(path, components)| {
+            path.ends_with("/TimeAxis")
+                && components
+                    .as_array()
+                    .expect("components")
+                    .iter()
+                    .any(|c| c.as_str().is_some_and(|c| c.ends_with("view_range")))
+        })
+        .map(|(path, _)| path)
+        .collect();
+    assert_eq!(time_axes.len(), 5, "{time_axes:?}");
     let full_t: Vec<i64> = (0..SAMPLES)
         .map(|i| (i as f64 / RATE_HZ * 1e9).round() as i64)
         .collect();

@@ -1,5 +1,6 @@
 """Reads an .rrd through Rerun's own decoder (rerun-sdk) and prints a JSON summary per entity:
-static components, and for every temporal component its `sim_time` stamps (ns) and values."""
+static components, and for every temporal component its `sim_time` stamps (ns) and values; and the
+components of every blueprint entity."""
 import json
 import sys
 
@@ -11,7 +12,13 @@ out = {
     "recordings": len(reader.recordings()),
     "blueprints": len(reader.blueprints()),
     "entities": {},
+    "blueprint_entities": {},
 }
+for store in reader.blueprints():
+    for chunk in reader.stream(store=store):
+        names = chunk.to_record_batch().schema.names
+        components = out["blueprint_entities"].setdefault(chunk.entity_path, [])
+        components += [n for n in names if ":" in n]
 for chunk in reader.stream():
     batch = chunk.to_record_batch()
     entity = out["entities"].setdefault(chunk.entity_path, {"static": [], "temporal": {}})

@@ -1,7 +1,7 @@
 //! The analysis of recordings of the shipped designs agrees with the closed forms of the
 //! reference texts: the simulation records a scene through the same path as `gyrolab run`, the
 //! analysis reads the MCAP file back and fits, and the fitted numbers are checked against
-//! Beghin's formulas (`gyro_model::theory`), to the tolerances of the simulation-core issue.
+//! Beghin's formulas (`gyro_model::theory`), each to the tolerance its assertion states.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use gyro_analysis::load::SHIP_TOPIC;
