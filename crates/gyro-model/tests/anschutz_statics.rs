@@ -168,7 +168,11 @@ fn modes_are_the_roots_of_the_characteristic_equation() {
         let mut modes = m.modes();
         modes.sort_by(|a, b| a.0.hypot(a.1).total_cmp(&b.0.hypot(b.1)));
         println!("L = {lat}°: modes {modes:?}\n  Beghin's roots {roots:?}");
-        assert_eq!(modes.len(), 2 * m.independent.len(), "L = {lat}°: mode count");
+        assert_eq!(
+            modes.len(),
+            2 * m.independent.len(),
+            "L = {lat}°: mode count"
+        );
 
         // Slow pair: the two smallest modes, complex conjugates.
         let (slow, slow_theory) = (modes[0], roots[0]);

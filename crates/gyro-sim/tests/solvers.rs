@@ -371,7 +371,12 @@ fn check_all_methods<P: Problem>(p: &mut P, spec: &Spec) {
             s.jacobian_evals,
             s.lu_decompositions,
         );
-        counts.push(snapshot_line(&p.name().replace(' ', "-"), method, spec.rtol, &s));
+        counts.push(snapshot_line(
+            &p.name().replace(' ', "-"),
+            method,
+            spec.rtol,
+            &s,
+        ));
         assert!(
             run.max_err < bound,
             "{} {method}: max error {:e} >= {bound:e}",
@@ -415,7 +420,10 @@ fn snapshot_line(problem: &str, method: Method, rtol: f64, s: &SolverStats) -> S
 
 /// The key of a snapshot line: its problem, method and rtol.
 fn snapshot_key(line: &str) -> String {
-    line.split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+    line.split_whitespace()
+        .take(3)
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// Compares `lines` (every line of `problem`) with the snapshot's lines of `problem`: panics with
@@ -426,7 +434,10 @@ fn check_snapshot(problem: &str, lines: &[String]) {
     let _one_at_a_time = FILE.lock().unwrap_or_else(|e| e.into_inner());
     let text = std::fs::read_to_string(SNAPSHOT).unwrap_or_default();
     let of_problem = |l: &&str| l.split_whitespace().next() == Some(problem);
-    let data = || text.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty());
+    let data = || {
+        text.lines()
+            .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+    };
     let old: Vec<&str> = data().filter(of_problem).collect();
     let mut new: Vec<&str> = lines.iter().map(String::as_str).collect();
     new.sort_unstable();

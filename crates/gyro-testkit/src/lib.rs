@@ -77,7 +77,9 @@ pub fn venv(name: &str, requirements: &[&str]) -> Option<PathBuf> {
 fn cache_dir() -> PathBuf {
     let exe = std::env::current_exe().ok();
     let target = exe.as_deref().and_then(|exe| {
-        let deps = exe.ancestors().find(|p| p.file_name().is_some_and(|n| n == "deps"))?;
+        let deps = exe
+            .ancestors()
+            .find(|p| p.file_name().is_some_and(|n| n == "deps"))?;
         Some(deps.parent()?.parent()?.to_path_buf())
     });
     match target {
