@@ -1,5 +1,6 @@
 //! Interop: the reference Python MCAP libraries decode every channel of our recordings.
-//! Creates a venv under the target dir (`pip install mcap mcap-protobuf-support protobuf`) once.
+//! Uses the workspace's pinned interop venv (`gyro_testkit::interop_python`), made once under
+//! the target dir; without python3 it prints SKIPPED, and fails under `CI=true`.
 #![allow(clippy::unwrap_used)]
 use crate::common;
 
@@ -10,44 +11,10 @@ use std::process::Command;
 use common::*;
 use gyro_mcap::WriterOptions;
 
-fn venv_python() -> Option<PathBuf> {
-    if Command::new("python3").arg("--version").output().is_err() {
-        println!("SKIPPED: no python3");
-        eprintln!("SKIPPED: no python3");
-        return None;
-    }
-    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gyro-mcap-pyenv");
-    let python = venv.join("bin/python");
-    let ready = venv.join(".installed");
-    if !ready.exists() {
-        let ok = Command::new("python3")
-            .args(["-m", "venv"])
-            .arg(&venv)
-            .status()
-            .unwrap();
-        assert!(ok.success(), "python3 -m venv failed");
-        let ok = Command::new(&python)
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--quiet",
-                "mcap",
-                "mcap-protobuf-support",
-                "protobuf",
-            ])
-            .status()
-            .unwrap();
-        assert!(ok.success(), "pip install failed");
-        std::fs::write(&ready, b"").unwrap();
-    }
-    Some(python)
-}
-
 #[test]
 fn python_mcap_decodes_every_channel() {
-    let Some(python) = venv_python() else {
-        return;
+    let Some(python) = gyro_testkit::interop_python() else {
+        return; // SKIPPED (outside CI): the Python mcap library did not decode our recording
     };
     let dir = tmp_dir("python");
     let path = dir.join("run.mcap");

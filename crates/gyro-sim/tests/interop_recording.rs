@@ -5,80 +5,20 @@
 //! - `rerun mcap convert` of rerun-sdk 0.36.3 (the Rerun version the workspace builds against)
 //!   turns the `/tf` FrameTransforms into transforms of every body, with our numbers.
 //!
-//! Both install what they need into one virtual environment under the target directory, made
-//! once and reused: the one gyro-view's `.rrd` test makes for rerun-sdk 0.36.3 (same name, so a
-//! workspace test run downloads Rerun once), with the two mcap packages added. Skipped with a visible `SKIPPED:` line only where there is no python3 (and,
-//! for the Rerun half, where rerun-sdk cannot be installed: the line says why).
+//! Both use the workspace's pinned interop venv (`gyro_testkit::interop_python`, the one every
+//! interop test uses, so a workspace test run downloads Rerun once), made once under the target
+//! directory and reused. Where it cannot be had (no python3, pip failing) the tests print a
+//! visible `SKIPPED:` line saying why, and fail under `CI=true`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
-use std::sync::{Mutex, OnceLock};
+use std::sync::OnceLock;
 
 use gyro_mcap::{ChannelKind, Column, PoseTable, RecordTable, Recording};
 use gyro_sim::{RecordOptions, Scene, SceneOverrides, record};
 use serde_json::Value;
-
-const MCAP_PACKAGES: [&str; 2] = ["mcap==1.6.0", "mcap-protobuf-support==0.6.0"];
-const RERUN_PACKAGE: &str = "rerun-sdk==0.36.3";
-
-fn skipped(why: &str) {
-    println!("SKIPPED: {why}");
-    eprintln!("SKIPPED: {why}");
-}
-
-/// The shared venv's python, made on first use (None: no python3 here).
-fn venv_python() -> Option<PathBuf> {
-    static LOCK: Mutex<()> = Mutex::new(());
-    let _one_at_a_time = LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    if Command::new("python3").arg("--version").output().is_err() {
-        return None;
-    }
-    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rerun-sdk-0.36.3-venv");
-    let python = venv.join("bin").join("python");
-    if !python.exists() {
-        let ok = Command::new("python3")
-            .args(["-m", "venv"])
-            .arg(&venv)
-            .status()
-            .is_ok_and(|s| s.success());
-        assert!(ok, "python3 -m venv {} failed", venv.display());
-    }
-    Some(python)
-}
-
-/// pip-installs `packages` into the venv once (a marker file names them); Err(pip's output).
-fn pip_install(python: &Path, packages: &[&str]) -> Result<(), String> {
-    static LOCK: Mutex<()> = Mutex::new(());
-    let _one_at_a_time = LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let venv = python.parent().and_then(Path::parent).unwrap();
-    let marker = venv.join(format!(".installed-{}", packages.join("+")));
-    if marker.exists() {
-        return Ok(());
-    }
-    let out = Command::new(python)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-        ])
-        .args(packages)
-        .output()
-        .map_err(|e| e.to_string())?;
-    if !out.status.success() {
-        return Err(format!(
-            "pip install {} failed:\n{}{}",
-            packages.join(" "),
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
-        ));
-    }
-    std::fs::write(&marker, b"").unwrap();
-    Ok(())
-}
 
 /// turn-90 cut to 4000 s: every channel has messages (the turn starts at 3600 s and lasts
 /// 90 s, so both its events fall inside), ~32 k messages.
@@ -123,11 +63,9 @@ fn record_row(t: &RecordTable, row: usize) -> BTreeMap<String, Value> {
 
 #[test]
 fn python_mcap_decodes_every_channel_of_a_shipped_scene() {
-    let Some(python) = venv_python() else {
-        skipped("no python3: the recording was not decoded by the Python mcap library");
-        return;
+    let Some(python) = gyro_testkit::interop_python() else {
+        return; // SKIPPED (outside CI): the recording was not decoded by the Python mcap library
     };
-    pip_install(&python, &MCAP_PACKAGES).unwrap_or_else(|e| panic!("{e}"));
     let (path, rec) = recording();
     let channels = rec.channels();
     let tf_rows = channels
@@ -270,16 +208,9 @@ fn frames(p: &PoseTable) -> BTreeMap<String, String> {
 
 #[test]
 fn rerun_mcap_convert_turns_the_poses_into_transforms_of_every_body() {
-    let Some(python) = venv_python() else {
-        skipped("no python3: `rerun mcap convert` (rerun-sdk 0.36.3) was not tried");
-        return;
+    let Some(python) = gyro_testkit::interop_python() else {
+        return; // SKIPPED (outside CI): `rerun mcap convert` (rerun-sdk 0.36.3) was not tried
     };
-    if let Err(e) = pip_install(&python, &[RERUN_PACKAGE]) {
-        skipped(&format!(
-            "rerun-sdk 0.36.3 could not be installed, so `rerun mcap convert` was not tried: {e}"
-        ));
-        return;
-    }
     let (path, rec) = recording();
     let rerun = python.parent().unwrap().join("rerun");
     let rrd = path.with_extension("rrd");

@@ -342,7 +342,12 @@ fn methods(rk4_step_s: f64) -> [Method; 4] {
 /// Every method on one problem: the error at every output sample is below the spec's bound,
 /// the grid is sampled completely (first t0, last t_end, ascending), and the final state handed
 /// back equals the last sample.
+///
+/// Then the work each method did (steps, rejected steps, rhs calls, Jacobians) equals the
+/// checked-in snapshot `tests/snapshots/solver_stats.txt`, so that a change of step counts is
+/// seen (and, when intended, rewritten with `UPDATE_SNAPSHOTS=1`).
 fn check_all_methods<P: Problem>(p: &mut P, spec: &Spec) {
+    let mut counts = Vec::new();
     for (method, bound) in methods(spec.rk4_step_s).into_iter().zip(spec.max_err) {
         let run = solve(
             p,
@@ -354,7 +359,7 @@ fn check_all_methods<P: Problem>(p: &mut P, spec: &Spec) {
         );
         let s = run.stats;
         eprintln!(
-            "{:<18} {:<7} rtol {:.0e}: max err {:.2e} (bound {:.0e}) steps {:>7} rejected {:>5} rhs {:>8} jac {:>6} lu {:>7} {:.1} ms",
+            "{:<18} {:<7} rtol {:.0e}: max err {:.2e} (bound {:.0e}) steps {:>7} rejected {:>5} rhs {:>8} jac {:>6} lu {:>7}",
             p.name(),
             method.to_string(),
             spec.rtol,
@@ -365,8 +370,13 @@ fn check_all_methods<P: Problem>(p: &mut P, spec: &Spec) {
             s.rhs_evals,
             s.jacobian_evals,
             s.lu_decompositions,
-            s.wall_time_s * 1e3
         );
+        counts.push(snapshot_line(
+            &p.name().replace(' ', "-"),
+            method,
+            spec.rtol,
+            &s,
+        ));
         assert!(
             run.max_err < bound,
             "{} {method}: max error {:e} >= {bound:e}",
@@ -380,6 +390,92 @@ fn check_all_methods<P: Problem>(p: &mut P, spec: &Spec) {
         assert!(run.samples.windows(2).all(|w| w[0].0 < w[1].0));
         assert_eq!(&run.samples[expected_samples - 1].1, &run.final_x);
     }
+    check_snapshot(&p.name().replace(' ', "-"), &counts);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Solver statistics snapshot
+
+/// (problem, method, rtol) → steps, rejected, rhs, jacobians; one line each, sorted, the
+/// problem's name with `-` for spaces.
+const SNAPSHOT: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/snapshots/solver_stats.txt"
+);
+
+const SNAPSHOT_HEADER: &str = "\
+# Work of each integrator on the closed-form problems of tests/solvers.rs (its harness_* tests):
+# problem, method (RK4 with its step), rtol, then accepted steps, rejected steps, rhs calls and
+# Jacobians. Checked by those tests; after an intended change rewrite it with
+#   UPDATE_SNAPSHOTS=1 cargo test --release -p gyro-sim --test solvers harness
+# and commit the diff with the reason.
+";
+
+fn snapshot_line(problem: &str, method: Method, rtol: f64, s: &SolverStats) -> String {
+    format!(
+        "{problem} {method:#} rtol={rtol:e} steps={} rejected={} rhs={} jacobians={}",
+        s.steps, s.rejected_steps, s.rhs_evals, s.jacobian_evals
+    )
+}
+
+/// The key of a snapshot line: its problem, method and rtol.
+fn snapshot_key(line: &str) -> String {
+    line.split_whitespace()
+        .take(3)
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Compares `lines` (every line of `problem`) with the snapshot's lines of `problem`: panics with
+/// a diff (`-` snapshot, `+` this run) when they differ, or, with `UPDATE_SNAPSHOTS=1`, rewrites
+/// the snapshot's lines of `problem` instead.
+fn check_snapshot(problem: &str, lines: &[String]) {
+    static FILE: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one_at_a_time = FILE.lock().unwrap_or_else(|e| e.into_inner());
+    let text = std::fs::read_to_string(SNAPSHOT).unwrap_or_default();
+    let of_problem = |l: &&str| l.split_whitespace().next() == Some(problem);
+    let data = || {
+        text.lines()
+            .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+    };
+    let old: Vec<&str> = data().filter(of_problem).collect();
+    let mut new: Vec<&str> = lines.iter().map(String::as_str).collect();
+    new.sort_unstable();
+    if old == new {
+        return;
+    }
+    if std::env::var("UPDATE_SNAPSHOTS").is_ok_and(|v| v == "1") {
+        let mut all: Vec<&str> = data().filter(|l| !of_problem(l)).chain(new).collect();
+        all.sort_unstable();
+        let mut out = SNAPSHOT_HEADER.to_string();
+        for l in all {
+            out.push_str(l);
+            out.push('\n');
+        }
+        std::fs::create_dir_all(std::path::Path::new(SNAPSHOT).parent().expect("folder"))
+            .expect("snapshot folder");
+        std::fs::write(SNAPSHOT, out).expect("snapshot written");
+        eprintln!("{problem}: {SNAPSHOT} rewritten");
+        return;
+    }
+    let mut diff = String::new();
+    for o in &old {
+        match new.iter().find(|n| snapshot_key(n) == snapshot_key(o)) {
+            Some(n) if n == o => {}
+            Some(n) => diff.push_str(&format!("- {o}\n+ {n}\n")),
+            None => diff.push_str(&format!("- {o}\n")),
+        }
+    }
+    for n in &new {
+        if !old.iter().any(|o| snapshot_key(o) == snapshot_key(n)) {
+            diff.push_str(&format!("+ {n}\n"));
+        }
+    }
+    panic!(
+        "{problem}: the solvers' work differs from {SNAPSHOT} (- snapshot, + this run):\n{diff}\
+         If the change is intended: UPDATE_SNAPSHOTS=1 cargo test --release -p gyro-sim --test \
+         solvers harness, and commit the snapshot with the reason."
+    );
 }
 
 #[test]

@@ -1,7 +1,8 @@
 //! The `.rrd` written for a synthetic scene loads back through Rerun's own decoder (the
-//! `rerun-sdk==0.36.3` Python package, installed by this test into a venv under the target
-//! directory) and holds the expected entity paths, a transform for every body at every kept
-//! sample, and the scalar series with the right lengths and values.
+//! `rerun-sdk==0.36.3` Python package, from the workspace's pinned interop venv under the
+//! target directory, `gyro_testkit::interop_python`) and holds the expected entity paths, a
+//! transform for every body at every kept sample, and the scalar series with the right lengths
+//! and values.
 
 use crate::common;
 
@@ -20,40 +21,10 @@ fn workdir(name: &str) -> PathBuf {
     d
 }
 
-/// The venv's python with rerun-sdk 0.36.3, made on first use; None (and a visible SKIPPED)
-/// when there is no python3.
+/// The workspace's pinned interop venv (rerun-sdk 0.36.3 among its packages), made on first
+/// use; None (and a visible SKIPPED) when it cannot be had, a failure under `CI=true`.
 fn rerun_python() -> Option<PathBuf> {
-    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("rerun-sdk-0.36.3-venv");
-    let py = venv.join("bin").join("python");
-    let ready = |py: &Path| {
-        Command::new(py)
-            .args([
-                "-c",
-                "import rerun, sys; sys.exit(rerun.__version__ != '0.36.3')",
-            ])
-            .status()
-            .is_ok_and(|s| s.success())
-    };
-    if ready(&py) {
-        return Some(py);
-    }
-    if Command::new("python3").arg("--version").output().is_err() {
-        println!("SKIPPED: python3 not found, the .rrd was not loaded back through rerun-sdk");
-        return None;
-    }
-    let ok = Command::new("python3")
-        .args(["-m", "venv"])
-        .arg(&venv)
-        .status()
-        .is_ok_and(|s| s.success());
-    assert!(ok, "python3 -m venv {} failed", venv.display());
-    let ok = Command::new(&py)
-        .args(["-m", "pip", "install", "-q", "rerun-sdk==0.36.3"])
-        .status()
-        .is_ok_and(|s| s.success());
-    assert!(ok, "pip install rerun-sdk==0.36.3 failed");
-    assert!(ready(&py), "rerun-sdk 0.36.3 does not import");
-    Some(py)
+    gyro_testkit::interop_python()
 }
 
 /// Entity → its JSON summary from tests/rrd_dump.py.

@@ -282,7 +282,7 @@ fn body_axes_engine_matches_the_reference_on_a_chain_that_uses_every_path() {
 
 #[test]
 fn body_axes_engine_matches_the_reference_on_a_rolling_turning_ship() {
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("perf-engine");
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("engine-agreement");
     std::fs::create_dir_all(&dir).expect("tmp dir");
     let mut rng = Lcg(13);
     for root in ["earth", "ship"] {
