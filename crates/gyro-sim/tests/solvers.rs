@@ -407,7 +407,7 @@ const SNAPSHOT_HEADER: &str = "\
 # Work of each integrator on the closed-form problems of tests/solvers.rs (its harness_* tests):
 # problem, method (RK4 with its step), rtol, then accepted steps, rejected steps, rhs calls and
 # Jacobians. Checked by those tests; after an intended change rewrite it with
-#   UPDATE_SNAPSHOTS=1 cargo test --release -p gyro-sim --test solvers harness
+#   UPDATE_SNAPSHOTS=1 cargo test --release -p gyro-sim --test integration solvers::harness
 # and commit the diff with the reason.
 ";
 
@@ -474,7 +474,7 @@ fn check_snapshot(problem: &str, lines: &[String]) {
     panic!(
         "{problem}: the solvers' work differs from {SNAPSHOT} (- snapshot, + this run):\n{diff}\
          If the change is intended: UPDATE_SNAPSHOTS=1 cargo test --release -p gyro-sim --test \
-         solvers harness, and commit the snapshot with the reason."
+         integration solvers::harness, and commit the snapshot with the reason."
     );
 }
 
