@@ -22,7 +22,8 @@
 //! - [`load`]: recordings → DataFrames; [`fit`]: damped sinusoid by Levenberg–Marquardt;
 //!   [`steady`]: settled value and drift; [`ballistic`]: deviation after manoeuvres;
 //!   [`rolling`]: mean error under rolling; [`metrics`]: per-run analysis and the table;
-//!   [`compare`], [`regress`], [`plot`].
+//!   [`compare`], [`regress`], [`plot`]; [`table`]: the aligned text and Markdown tables every
+//!   report and the CLI print.
 //!
 //! Units are SI inside (s, rad); renderers for people show minutes and degrees.
 
@@ -36,6 +37,7 @@ pub mod plot;
 pub mod regress;
 pub mod rolling;
 pub mod steady;
+pub mod table;
 
 pub use compare::{ComparisonReport, compare};
 pub use error::{AnalysisError, Result};
