@@ -291,7 +291,7 @@ fn doubles<const N: usize>(b: &[u8]) -> [f64; N] {
     while at < b.len() {
         let tag = varint(b, &mut at);
         let f = (tag >> 3) as usize;
-        if f >= 1 && f <= N {
+        if (1..=N).contains(&f) {
             out[f - 1] = f64_at(b, at);
         }
         at += 8;
@@ -439,7 +439,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     println!(
         "{hours} h at 10 Hz: {} messages, {threads} hardware threads",
-        steps * (1 + FRAMES.len() as u64 - 1)
+        steps * FRAMES.len() as u64 // one record and six poses a step
     );
     println!(
         "{:<34} {:>8} {:>8} {:>10} {:>14} {:>9}",
