@@ -9,6 +9,7 @@ use serde::Serialize;
 use crate::error::{AnalysisError, Result};
 use crate::metrics::{AnalysisOptions, MetricsTable, RunAnalysis, RunMetrics, analyze_all};
 use crate::plot::{Figure, PALETTE, Series};
+use crate::table::Table;
 
 /// The comparison of a set of runs.
 #[derive(Debug, Clone, Serialize)]
@@ -142,44 +143,19 @@ impl ComparisonReport {
         (header, rows)
     }
 
+    /// The grid as one table: metrics as rows, runs as right-aligned columns.
+    fn grid_table(&self) -> Table {
+        let (header, rows) = self.grid();
+        let mut t = Table::new(&header).numbers_right();
+        for r in rows {
+            t.row(r);
+        }
+        t
+    }
+
     /// Aligned columns for a terminal.
     pub fn render_terminal(&self) -> String {
-        let (header, rows) = self.grid();
-        let widths: Vec<usize> = (0..header.len())
-            .map(|c| {
-                std::iter::once(&header)
-                    .chain(&rows)
-                    .map(|r| r[c].chars().count())
-                    .max()
-                    .unwrap_or(0)
-            })
-            .collect();
-        let line = |r: &Vec<String>| {
-            let cells: Vec<String> = r
-                .iter()
-                .zip(&widths)
-                .enumerate()
-                .map(|(i, (s, w))| {
-                    let pad = w.saturating_sub(s.chars().count());
-                    if i == 0 {
-                        format!("{s}{}", " ".repeat(pad))
-                    } else {
-                        format!("{}{s}", " ".repeat(pad))
-                    }
-                })
-                .collect();
-            cells.join("  ").trim_end().to_owned()
-        };
-        let mut out = line(&header);
-        out.push('\n');
-        out.push_str(
-            &"-".repeat(widths.iter().sum::<usize>() + 2 * widths.len().saturating_sub(1)),
-        );
-        out.push('\n');
-        for r in &rows {
-            out.push_str(&line(r));
-            out.push('\n');
-        }
+        let mut out = self.grid_table().rule().render();
         self.push_notes(&mut out, "");
         if let (Some(svg), Some(png)) = (&self.plot_svg, &self.plot_png) {
             out.push_str(&format!("plot: {} and {}\n", svg.display(), png.display()));
@@ -189,22 +165,7 @@ impl ComparisonReport {
 
     /// A Markdown table (metrics as rows, runs as columns), then the notes and plot.
     pub fn render_markdown(&self) -> String {
-        let (header, rows) = self.grid();
-        let esc = |s: &String| s.replace('|', "\\|");
-        let mut out = format!(
-            "| {} |\n|{}|\n",
-            header.iter().map(esc).collect::<Vec<_>>().join(" | "),
-            std::iter::once(":---")
-                .chain(std::iter::repeat_n("---:", header.len() - 1))
-                .collect::<Vec<_>>()
-                .join("|")
-        );
-        for r in &rows {
-            out.push_str(&format!(
-                "| {} |\n",
-                r.iter().map(esc).collect::<Vec<_>>().join(" | ")
-            ));
-        }
+        let mut out = self.grid_table().render_markdown();
         self.push_notes(&mut out, "- ");
         if let Some(png) = &self.plot_png {
             out.push_str(&format!(

@@ -25,7 +25,8 @@
 //!   [`steady`]: settled value and drift; [`ballistic`]: deviation after manoeuvres;
 //!   [`rolling`]: mean error under rolling; [`metrics`]: per-run analysis and the table;
 //!   [`compare`]: runs side by side; [`regress`]: the baseline check; [`plot`]: line plots as
-//!   SVG and PNG (also used by `gyrolab accuracy`); [`error`]: the crate's one error type.
+//!   SVG and PNG (also used by `gyrolab accuracy`); [`table`]: the aligned text and Markdown
+//!   tables every report and the CLI print; [`error`]: the crate's one error type.
 //!
 //! Units are SI inside (s, rad); renderers for people show minutes and degrees.
 
@@ -39,6 +40,7 @@ pub mod plot;
 pub mod regress;
 pub mod rolling;
 pub mod steady;
+pub mod table;
 
 pub use compare::{ComparisonReport, compare};
 pub use error::{AnalysisError, Result};

@@ -24,6 +24,7 @@ use crate::load::{
 };
 use crate::rolling::{RollingError, RollingOptions, rolling_error};
 use crate::steady::{SteadyError, SteadyOptions, steady_error};
+use crate::table::Table;
 
 /// Settings of [`analyze_run`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -336,6 +337,7 @@ impl MetricsTable {
         let mut out = String::new();
         for r in &self.rows {
             out.push_str(&format!("{}  ({})\n", r.run_id, r.path));
+            let mut t = Table::headless(2).indent("  ");
             for (name, cell) in r.cells().iter().skip(2) {
                 let text = match cell {
                     Cell::Str(s) if s.is_empty() => continue,
@@ -344,8 +346,9 @@ impl MetricsTable {
                     Cell::F64(Some(v)) => format_number(*v),
                     Cell::U64(Some(v)) => v.to_string(),
                 };
-                out.push_str(&format!("  {name:<30} {text}\n"));
+                t.row([name.to_string(), text]);
             }
+            out.push_str(&t.render());
         }
         out
     }

@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{AnalysisError, Result};
 use crate::metrics::{Cell, MetricsTable, RunMetrics, format_number};
+use crate::table::{Align, Table};
 
 /// One metric's tolerance: |current − baseline| ≤ abs + rel·|baseline|.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -231,29 +232,12 @@ impl RegressionReport {
 
     /// What moved, aligned for a terminal, then PASS or FAIL.
     pub fn render_terminal(&self) -> String {
-        let lines = self.lines(false);
-        let header = ["status", "run", "metric", "baseline", "current", "delta"].map(String::from);
-        let widths: Vec<usize> = (0..6)
-            .map(|c| {
-                std::iter::once(&header)
-                    .chain(&lines)
-                    .map(|l| l[c].chars().count())
-                    .max()
-                    .unwrap_or(0)
-            })
-            .collect();
-        let mut out = String::new();
-        if !lines.is_empty() {
-            for l in std::iter::once(&header).chain(&lines) {
-                let cells: Vec<String> = l
-                    .iter()
-                    .zip(&widths)
-                    .map(|(s, w)| format!("{s}{}", " ".repeat(w.saturating_sub(s.chars().count()))))
-                    .collect();
-                out.push_str(cells.join("  ").trim_end());
-                out.push('\n');
-            }
-        }
+        let t = self.table();
+        let mut out = if t.is_empty() {
+            String::new()
+        } else {
+            t.render()
+        };
         out.push_str(&self.summary());
         out.push('\n');
         out
@@ -262,14 +246,21 @@ impl RegressionReport {
     /// The same as a Markdown table.
     pub fn render_markdown(&self) -> String {
         let mut out = format!("**{}**\n\n", self.summary());
-        let lines = self.lines(false);
-        if !lines.is_empty() {
-            out.push_str("| status | run | metric | baseline | current | delta |\n|---|---|---|---:|---:|---|\n");
-            for l in lines {
-                out.push_str(&format!("| {} |\n", l.join(" | ")));
-            }
+        let t = self.table();
+        if !t.is_empty() {
+            out.push_str(&t.render_markdown());
         }
         out
+    }
+
+    fn table(&self) -> Table {
+        let mut t = Table::new(&["status", "run", "metric", "baseline", "current", "delta"])
+            .align(3, Align::Right)
+            .align(4, Align::Right);
+        for l in self.lines(false) {
+            t.row(l);
+        }
+        t
     }
 }
 

@@ -1,5 +1,12 @@
 //! Writing recordings: [`RecordingWriter`] (typed channels, the public API) over [`Sink`] (MCAP
 //! records, chunking, indexes and the summary; also used by `recover` to re-emit raw messages).
+//!
+//! Why not the `mcap` crate's writer: on the same 1 512 000 messages (6 h of the throughput
+//! load, files checked to hold the same message bytes), in one run, it used 1.8× the CPU time of
+//! this writer at the same zstd level 3 (1.64 against 0.92 CPU s) and 4.6× that of this writer's
+//! default level −4, which it cannot use (it takes no negative level; at its level 1, 1.14 CPU s
+//! for a 5 % larger file); wall time was 54 s against 2.0 s on a machine loaded by other builds
+//! (load average 13 on 2 cores). `cargo bench -p gyro-mcap --bench vs_mcap`.
 
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;

@@ -1,5 +1,10 @@
 //! Small dense linear algebra on any [`Real`] (so exact Jacobians flow through the solves),
 //! and the matrix exponential used to propagate `linear` models exactly.
+//!
+//! `tests/linalg_stiff.rs` holds [`eigenvalues`] and [`expm`] to closed forms (a rotated
+//! block-diagonal matrix of eigenvalues 1e-3 … 1e3) and to SciPy on the linearised Anschütz 1906
+//! (|λ| from 1.6e-3 to 562 1/s): eigenvalues within 1.2e-12 relative of SciPy's, exp(A h) within
+//! 3e-11 of SciPy's for h up to 3600 s (`cargo test --release -p gyro-model --test linalg_stiff`).
 
 use crate::real::Real;
 

@@ -1,6 +1,7 @@
 //! The subcommands: each turns arguments into calls on the library crates and prints the result.
 
 use clap::Args;
+use gyro_analysis::table::{Align, Table};
 use gyro_model::Fidelity;
 use gyro_sim::solvers::Method;
 use gyro_sim::{RecordOptions, Scene, SceneOverrides};
@@ -253,6 +254,17 @@ pub fn demo(out: &Path, json: bool) -> Result<ExitCode, CliError> {
         "speed-change-20kn",
     ];
     let mut rows = Vec::new();
+    let mut lines = Table::new(&[
+        "scene",
+        "MB",
+        "steps",
+        "wall s",
+        "max |error|",
+        "error at end",
+        "end s",
+        "slow mode s",
+    ])
+    .numbers_right();
     for name in scenes {
         let scene = Scene::load(name, &SceneOverrides::default()).map_err(bad)?;
         let path = out.join(format!("{name}.mcap"));
@@ -278,18 +290,16 @@ pub fn demo(out: &Path, json: bool) -> Result<ExitCode, CliError> {
             .unwrap_or_default();
         let period = dc.get("mode_period_s").cloned().unwrap_or_default();
         let tend = t.last().copied().unwrap_or(0.0);
-        if !json {
-            println!(
-                "{name:<22} {:>7.2} MB {:>7} steps {:>7.3} s   reading error: max {:>7.3}°, {:>7.3}° at t = {:>6.0} s   slow mode {} s",
-                s.bytes as f64 / 1e6,
-                s.stats.solver.steps,
-                s.wall_time_s,
-                max.to_degrees(),
-                last.to_degrees(),
-                tend,
-                period.split('.').next().unwrap_or("-")
-            );
-        }
+        lines.row([
+            name.to_string(),
+            format!("{:.2}", s.bytes as f64 / 1e6),
+            s.stats.solver.steps.to_string(),
+            format!("{:.3}", s.wall_time_s),
+            format!("{:.3}°", max.to_degrees()),
+            format!("{:.3}°", last.to_degrees()),
+            format!("{tend:.0}"),
+            period.split('.').next().unwrap_or("-").to_string(),
+        ]);
         rows.push((name, s, last, max, period));
     }
     if json {
@@ -299,6 +309,7 @@ pub fn demo(out: &Path, json: bool) -> Result<ExitCode, CliError> {
             .collect();
         println!("{}", serde_json::Value::Array(v));
     } else {
+        print!("{}", lines.render());
         println!(
             "recordings are in {}/ (open one with `gyrolab inspect`)",
             out.display()
@@ -347,9 +358,11 @@ pub fn list(items: &[(&str, &str)], what: &str, json: bool) -> Result<ExitCode, 
         println!("{}", serde_json::Value::Array(v));
     } else {
         println!("shipped {what}:");
+        let mut table = Table::headless(2).indent("  ");
         for (n, t) in items {
-            println!("  {n:<24} {}", gyro_sim::library::describe(t));
+            table.row([n.to_string(), gyro_sim::library::describe(t)]);
         }
+        print!("{}", table.render());
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -389,16 +402,20 @@ pub fn inspect(path: &Path, json: bool) -> Result<ExitCode, CliError> {
     }
     println!("{}", path.display());
     println!("channels:");
+    let mut table = Table::headless(4).indent("  ").align(2, Align::Right);
     for c in &chans {
         let range = match (c.first_log_time_ns, c.last_log_time_ns) {
             (Some(a), Some(b)) => format!("{:.3} … {:.3} s", a as f64 * 1e-9, b as f64 * 1e-9),
             _ => "-".into(),
         };
-        println!(
-            "  {:<18} {:<28} {:>9} msgs  {range}",
-            c.topic, c.schema_name, c.message_count
-        );
+        table.row([
+            c.topic.clone(),
+            c.schema_name.clone(),
+            format!("{} msgs", c.message_count),
+            range,
+        ]);
     }
+    print!("{}", table.render());
     println!("metadata:");
     for (name, m) in rec.metadata() {
         let keys: Vec<String> = m
@@ -612,9 +629,11 @@ pub fn accuracy(a: AccuracyArgs) -> Result<ExitCode, CliError> {
                 .collect();
             println!("{}", serde_json::Value::Array(v));
         } else {
+            let mut table = Table::headless(2);
             for (n, d) in cases {
-                println!("{n:<22} {d}");
+                table.row([n.to_string(), d.to_string()]);
             }
+            print!("{}", table.render());
         }
         return Ok(ExitCode::SUCCESS);
     }
