@@ -41,6 +41,7 @@ use rerun::blueprint::{
     TextLogView, TimePanel, TimeSeriesView, Vertical,
 };
 use rerun::{RecordingStream, RecordingStreamBuilder, TimeColumn, Timeline};
+use gyro_mcap::contract::run_record;
 
 pub use fit::{AnalysisFit, DampedSinusoid, NoFit, SettlingFit, default_fit};
 pub use math::TILT_SATURATION_RAD;
@@ -282,16 +283,16 @@ fn log_about(
          reading error in the indicated-North arrow ×{}; poses at most {} Hz / {} per frame.",
         run.name,
         run.path.display(),
-        m("run", "scene_name"),
-        m("run", "design_name"),
-        m("run", "design_kind"),
-        m("run", "fidelity"),
-        m("run", "integrator"),
-        m("run", "rtol"),
-        m("run", "duration_s"),
-        m("run", "output_rate_hz"),
+        m(run_record::NAME, run_record::SCENE_NAME),
+        m(run_record::NAME, run_record::DESIGN_NAME),
+        m(run_record::NAME, run_record::DESIGN_KIND),
+        m(run_record::NAME, run_record::FIDELITY),
+        m(run_record::NAME, run_record::INTEGRATOR),
+        m(run_record::NAME, run_record::RTOL),
+        m(run_record::NAME, run_record::DURATION_S),
+        m(run_record::NAME, run_record::OUTPUT_RATE_HZ),
         run.status(),
-        m("run", "effects"),
+        m(run_record::NAME, run_record::EFFECTS),
         opts.tilt_exaggeration,
         opts.error_exaggeration,
         opts.max_pose_rate_hz,
