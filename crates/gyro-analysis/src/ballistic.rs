@@ -16,8 +16,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 use crate::fit::{Estimate, FitOptions, Quality, fit_damped_sinusoid};
 use crate::load::{EVENTS_TOPIC, Run};
-use gyro_mcap::contract::events as event_fields;
 use crate::steady::{SteadyOptions, steady_error};
+use gyro_mcap::contract::events as event_fields;
 
 // Physical constants and the elementary speed error live in one place, gyro-model.
 pub use gyro_model::constants::{EARTH_RADIUS_M, EARTH_RATE_RAD_PER_S, schuler_period_s};

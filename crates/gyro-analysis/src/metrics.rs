@@ -22,12 +22,12 @@ use crate::fit::{FitOptions, OscillationFit, Quality, decimate, fit_damped_sinus
 use crate::load::{
     COMPASS_TOPIC, LoadOptions, Run, SHIP_TOPIC, SOLVER_TOPIC, expand_inputs, load_run,
 };
+use crate::rolling::{RollingError, RollingOptions, rolling_error};
+use crate::steady::{SteadyError, SteadyOptions, steady_error};
 use gyro_mcap::contract::events as event_fields;
 use gyro_mcap::contract::{
     compass_state, design_constants_record, result_record, run_record, ship_state, solver_stats,
 };
-use crate::rolling::{RollingError, RollingOptions, rolling_error};
-use crate::steady::{SteadyError, SteadyOptions, steady_error};
 
 /// Settings of [`analyze_run`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -550,10 +550,12 @@ pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> 
     let period_hint = azimuth
         .period_s
         .map(|p| p.value)
-        .or_else(|| run.meta_f64(
-            design_constants_record::NAME,
-            design_constants_record::MODE_PERIOD_S,
-        ))
+        .or_else(|| {
+            run.meta_f64(
+                design_constants_record::NAME,
+                design_constants_record::MODE_PERIOD_S,
+            )
+        })
         .or(design_period);
 
     // Steady error: after the last manoeuvre (or the whole run).
@@ -592,7 +594,8 @@ pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> 
             )
             .unwrap_or_else(schuler_period_s),
         latitude_rad: run
-            .meta_f64(run_record::NAME, run_record::LATITUDE_DEG).map(f64::to_radians),
+            .meta_f64(run_record::NAME, run_record::LATITUDE_DEG)
+            .map(f64::to_radians),
     };
     let ballistic = ballistic_deviations(
         t,

@@ -304,13 +304,25 @@ pub mod attachments {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum BodyShape {
     /// A ring about the body's z axis.
-    Ring { radius_m: f64, width_m: f64 },
+    Ring {
+        radius_m: f64,
+        width_m: f64,
+    },
     /// A disc (rotor) about the body's spin axis.
-    Disc { radius_m: f64, thickness_m: f64 },
-    Box { size_m: [f64; 3] },
-    Sphere { radius_m: f64 },
+    Disc {
+        radius_m: f64,
+        thickness_m: f64,
+    },
+    Box {
+        size_m: [f64; 3],
+    },
+    Sphere {
+        radius_m: f64,
+    },
     /// A ship hull outline (box with a bow).
-    Hull { size_m: [f64; 3] },
+    Hull {
+        size_m: [f64; 3],
+    },
     None,
 }
 

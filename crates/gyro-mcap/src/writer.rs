@@ -1140,7 +1140,9 @@ impl RecordingWriter {
         let call = format!("write_f64_record on {topic:?}");
         match self.encoders.get(ch.0 as usize) {
             None => self.usage(call, "a channel id returned by this writer"),
-            Some(ChannelEncoder::Pose) => self.usage(call, "a record channel, found a pose channel"),
+            Some(ChannelEncoder::Pose) => {
+                self.usage(call, "a record channel, found a pose channel")
+            }
             Some(ChannelEncoder::Record { all_f64: None, .. }) => self.usage(
                 call,
                 "a channel whose fields are all F64 (use write_record)",

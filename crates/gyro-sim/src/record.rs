@@ -4,9 +4,7 @@
 //! an interrupted run (Ctrl-C) still closes a valid file and records how far it got.
 
 use crate::program::ShipProgram;
-use crate::run::{
-    ManoeuvreEvent, Progress, RunError, RunObserver, RunProbe, RunStats, Simulation,
-};
+use crate::run::{ManoeuvreEvent, Progress, RunError, RunObserver, RunProbe, RunStats, Simulation};
 use crate::scene::Scene;
 use crate::solvers::StopReason;
 use gyro_mcap::contract::{
@@ -155,10 +153,8 @@ struct Channels {
 impl Channels {
     fn add(w: &mut RecordingWriter, coordinates: &[String]) -> Result<Channels, RecordingError> {
         Ok(Channels {
-            compass: w.add_record_channel(
-                compass_state::TOPIC,
-                &compass_state::schema(coordinates),
-            )?,
+            compass: w
+                .add_record_channel(compass_state::TOPIC, &compass_state::schema(coordinates))?,
             ship: w.add_record_channel(ship_state::TOPIC, &ship_state::schema())?,
             events: w.add_record_channel(events::TOPIC, &events::schema())?,
             solver_stats: w.add_record_channel(solver_stats::TOPIC, &solver_stats::schema())?,
@@ -349,8 +345,7 @@ impl<'s, 'p> Recorder<'s, 'p> {
         if t >= self.next_stats_s && t < self.scene.duration_s {
             // A progress report: the work so far.
             self.write_solver_stats(t, &probe.progress())?;
-            self.next_stats_s =
-                ((t / SOLVER_STATS_EVERY_S).floor() + 1.0) * SOLVER_STATS_EVERY_S;
+            self.next_stats_s = ((t / SOLVER_STATS_EVERY_S).floor() + 1.0) * SOLVER_STATS_EVERY_S;
         }
         Ok(())
     }
@@ -514,10 +509,7 @@ fn write_static_metadata(
         ]),
     )?;
     w.write_metadata(bodies_record::NAME, &bodies_metadata(model))?;
-    w.write_metadata(
-        design_constants_record::NAME,
-        &design_constants(sim, scene),
-    )?;
+    w.write_metadata(design_constants_record::NAME, &design_constants(sim, scene))?;
     w.write_metadata(
         run_record::NAME,
         &run_metadata(sim, scene, coordinates, rhs_cost_ns),
@@ -541,7 +533,10 @@ fn bodies_metadata(model: &CompiledModel<ShipProgram>) -> BTreeMap<String, Strin
     let mut m = BTreeMap::new();
     for (bi, b) in model.design.bodies.iter().enumerate() {
         let key = |what| bodies_record::key(&b.name, what);
-        m.insert(key(bodies_record::PARENT), parent_frame(model, bi).to_owned());
+        m.insert(
+            key(bodies_record::PARENT),
+            parent_frame(model, bi).to_owned(),
+        );
         m.insert(
             key(bodies_record::SHAPE),
             body_shape(&b.shape).metadata_value(),
@@ -659,7 +654,10 @@ fn design_constants(sim: &Simulation, scene: &Scene) -> BTreeMap<String, String>
             format!("{}", th.undamped_period()),
         );
     }
-    m.insert(design_constants_record::SCHULER_PERIOD_S.into(), format!("{}", schuler_period_s()));
+    m.insert(
+        design_constants_record::SCHULER_PERIOD_S.into(),
+        format!("{}", schuler_period_s()),
+    );
     // Slowest oscillatory mode of the linearisation.
     let modes = sim.model.modes();
     if let Some(slow) = modes
@@ -671,7 +669,10 @@ fn design_constants(sim: &Simulation, scene: &Scene) -> BTreeMap<String, String>
             design_constants_record::MODE_PERIOD_S.into(),
             format!("{}", std::f64::consts::TAU / slow.1),
         );
-        m.insert(design_constants_record::MODE_DECAY_RATE_PER_S.into(), format!("{}", -slow.0));
+        m.insert(
+            design_constants_record::MODE_DECAY_RATE_PER_S.into(),
+            format!("{}", -slow.0),
+        );
     }
     m
 }

@@ -36,12 +36,12 @@ mod series;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use gyro_mcap::contract::run_record;
 use rerun::blueprint::{
     Blueprint, BlueprintPanel, ContainerLike, Horizontal, SelectionPanel, Spatial3DView,
     TextLogView, TimePanel, TimeSeriesView, Vertical,
 };
 use rerun::{RecordingStream, RecordingStreamBuilder, TimeColumn, Timeline};
-use gyro_mcap::contract::run_record;
 
 pub use fit::{AnalysisFit, DampedSinusoid, NoFit, SettlingFit, default_fit};
 pub use math::TILT_SATURATION_RAD;

@@ -97,7 +97,11 @@ fn to_i64_ns(t: &[u64]) -> Vec<i64> {
 }
 
 fn events(rec: &Recording) -> Result<Vec<Event>, ViewError> {
-    if !rec.channels().iter().any(|c| c.topic == events_channel::TOPIC) {
+    if !rec
+        .channels()
+        .iter()
+        .any(|c| c.topic == events_channel::TOPIC)
+    {
         return Ok(Vec::new());
     }
     let table = rec.read_records(events_channel::TOPIC)?;

@@ -4,8 +4,8 @@
 
 use std::collections::BTreeMap;
 
-use gyro_model::Shape;
 use gyro_mcap::contract::{compass_state, ship_state, tf};
+use gyro_model::Shape;
 use rerun::{
     Arrows3D, Boxes3D, Color, Cylinders3D, Ellipsoids3D, FillMode, LineStrips3D, Mesh3D,
     RecordingStream, TimeColumn, Transform3D,

@@ -278,7 +278,10 @@ pub fn demo(out: &Path, json: bool) -> Result<ExitCode, CliError> {
             .get(design_constants_record::NAME)
             .cloned()
             .unwrap_or_default();
-        let period = dc.get(design_constants_record::MODE_PERIOD_S).cloned().unwrap_or_default();
+        let period = dc
+            .get(design_constants_record::MODE_PERIOD_S)
+            .cloned()
+            .unwrap_or_default();
         let tend = t.last().copied().unwrap_or(0.0);
         if !json {
             println!(

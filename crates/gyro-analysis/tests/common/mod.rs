@@ -87,10 +87,13 @@ pub fn write_run(path: &Path, spec: &Spec) -> PathBuf {
         w.add_record_channel(compass_state::TOPIC, &compass_schema())
             .unwrap()
     });
-    let ship = spec
-        .ship
-        .then(|| w.add_record_channel(ship_state::TOPIC, &ship_schema()).unwrap());
-    let events = w.add_record_channel(events::TOPIC, &event_schema()).unwrap();
+    let ship = spec.ship.then(|| {
+        w.add_record_channel(ship_state::TOPIC, &ship_schema())
+            .unwrap()
+    });
+    let events = w
+        .add_record_channel(events::TOPIC, &event_schema())
+        .unwrap();
     let solver = w
         .add_record_channel(solver_stats::TOPIC, &solver_schema())
         .unwrap();

@@ -195,7 +195,8 @@ pub fn write_recording(path: &Path, n: usize, rate_hz: f64) {
             parent.to_owned(),
         );
     }
-    w.write_metadata(bodies_record::NAME, &bodies).expect("meta");
+    w.write_metadata(bodies_record::NAME, &bodies)
+        .expect("meta");
     w.write_metadata(
         design_record::NAME,
         &meta(&[
