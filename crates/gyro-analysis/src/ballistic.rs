@@ -17,6 +17,7 @@ use crate::error::Result;
 use crate::fit::{Estimate, FitOptions, Quality, fit_damped_sinusoid};
 use crate::load::{EVENTS_TOPIC, Run};
 use crate::steady::{SteadyOptions, steady_error};
+use gyro_mcap::contract::events as event_fields;
 
 // Physical constants and the elementary speed error live in one place, gyro-model.
 pub use gyro_model::constants::{EARTH_RADIUS_M, EARTH_RATE_RAD_PER_S, schuler_period_s};
@@ -46,8 +47,8 @@ pub fn events_of(run: &Run) -> Result<Vec<ManoeuvreEvent>> {
         return Ok(Vec::new());
     };
     let n = frame.height();
-    let time = run.f64_field(EVENTS_TOPIC, "time_s")?.to_vec();
-    let phase = run.str_field(EVENTS_TOPIC, "phase")?;
+    let time = run.f64_field(EVENTS_TOPIC, event_fields::TIME_S)?.to_vec();
+    let phase = run.str_field(EVENTS_TOPIC, event_fields::PHASE)?;
     let strings = |name: &str| {
         run.str_field(EVENTS_TOPIC, name)
             .unwrap_or_else(|_| vec![String::new(); n])
@@ -57,20 +58,20 @@ pub fn events_of(run: &Run) -> Result<Vec<ManoeuvreEvent>> {
             .map(|s| s.to_vec())
             .unwrap_or_else(|_| vec![f64::NAN; n])
     };
-    let manoeuvre = strings("manoeuvre");
-    let description = strings("description");
+    let manoeuvre = strings(event_fields::MANOEUVRE);
+    let description = strings(event_fields::DESCRIPTION);
     let segment: Vec<u64> = frame
-        .column("segment")
+        .column(event_fields::SEGMENT)
         .ok()
         .and_then(|c| c.u64().ok())
         .map(|c| c.iter().map(|v| v.unwrap_or(0)).collect())
         .unwrap_or_else(|| vec![0; n]);
     let (sb, sa, hb, ha, du) = (
-        floats("speed_before_m_per_s"),
-        floats("speed_after_m_per_s"),
-        floats("heading_before_rad"),
-        floats("heading_after_rad"),
-        floats("duration_s"),
+        floats(event_fields::SPEED_BEFORE_M_PER_S),
+        floats(event_fields::SPEED_AFTER_M_PER_S),
+        floats(event_fields::HEADING_BEFORE_RAD),
+        floats(event_fields::HEADING_AFTER_RAD),
+        floats(event_fields::DURATION_S),
     );
     Ok((0..n)
         .map(|i| ManoeuvreEvent {
@@ -184,18 +185,18 @@ pub fn ballistic_deviations(
     let mut out = Vec::new();
     let mut previous_end = t.first().copied().unwrap_or(0.0);
     for (i, start) in events.iter().enumerate() {
-        if start.phase != "start" {
+        if start.phase != event_fields::START {
             continue;
         }
         let Some(end) = events[i + 1..]
             .iter()
-            .find(|e| e.phase == "end" && e.segment == start.segment)
+            .find(|e| e.phase == event_fields::END && e.segment == start.segment)
         else {
             continue; // The recording ends inside the manoeuvre.
         };
         let next_start = events
             .iter()
-            .find(|e| e.phase == "start" && e.time_s > end.time_s)
+            .find(|e| e.phase == event_fields::START && e.time_s > end.time_s)
             .map_or(t_last, |e| e.time_s);
         out.push(one_deviation(
             t,

@@ -45,7 +45,7 @@ pub mod table;
 pub use compare::{ComparisonReport, compare};
 pub use error::{AnalysisError, Result};
 pub use fit::{Estimate, FitOptions, OscillationFit, Quality, fit_damped_sinusoid};
-pub use load::{LoadOptions, RECOVERED_STATUS, Run, load_run, load_runs};
+pub use load::{LoadOptions, Run, load_run, load_runs};
 pub use metrics::{
     AnalysisOptions, MetricsTable, RunAnalysis, RunMetrics, analyze_run, analyze_runs,
 };

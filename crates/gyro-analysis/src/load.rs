@@ -9,6 +9,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use gyro_mcap::contract::{TIME_S, result_record, run_record, status};
 use gyro_mcap::{
     ChannelKind, ChannelTable, Column as McapColumn, PoseTable, RecordTable, Recording,
 };
@@ -17,16 +18,16 @@ use rayon::prelude::*;
 
 use crate::error::{AnalysisError, Result};
 
-/// The compass state channel (see `docs/recordings.md`).
-pub const COMPASS_TOPIC: &str = "/compass/state";
-/// The ship state channel.
-pub const SHIP_TOPIC: &str = "/ship/state";
+/// The compass state channel (see `docs/recordings.md`; the topics are `gyro_mcap::contract`'s).
+pub use gyro_mcap::contract::compass_state::TOPIC as COMPASS_TOPIC;
 /// Manoeuvre start and end events.
-pub const EVENTS_TOPIC: &str = "/events";
+pub use gyro_mcap::contract::events::TOPIC as EVENTS_TOPIC;
+/// The ship state channel.
+pub use gyro_mcap::contract::ship_state::TOPIC as SHIP_TOPIC;
 /// Solver statistics.
-pub const SOLVER_TOPIC: &str = "/solver/stats";
+pub use gyro_mcap::contract::solver_stats::TOPIC as SOLVER_TOPIC;
 /// Poses (`foxglove.FrameTransform`).
-pub const TF_TOPIC: &str = "/tf";
+pub use gyro_mcap::contract::tf::TOPIC as TF_TOPIC;
 
 /// Which channels to decode.
 #[derive(Debug, Clone, Default)]
@@ -139,18 +140,17 @@ impl Run {
     /// written when the run closes its file, or the `run` record of files written before the two
     /// were split. `None` in a file recovered from a killed run.
     pub fn result(&self, key: &str) -> Option<&str> {
-        self.meta("result", key).or_else(|| self.meta("run", key))
+        self.meta(result_record::NAME, key)
+            .or_else(|| self.meta(run_record::NAME, key))
     }
 
-    /// How the run ended: `complete`, `interrupted at t = … s`, or [`RECOVERED_STATUS`] when the
-    /// file has no result (its writer was killed and `gyrolab recover` salvaged it).
+    /// How the run ended: `complete`, `interrupted at t = … s`, or [`status::RECOVERED`] when
+    /// the file has no result (its writer was killed and `gyrolab recover` salvaged it).
     pub fn status(&self) -> &str {
-        self.result("status").unwrap_or(RECOVERED_STATUS)
+        self.result(result_record::STATUS)
+            .unwrap_or(status::RECOVERED)
     }
 }
-
-/// [`Run::status`] of a recording with no `result` record.
-pub const RECOVERED_STATUS: &str = "incomplete (no result record: recovered from a killed run)";
 
 pub(crate) fn quoted<'a>(names: impl Iterator<Item = &'a str>) -> String {
     let v: Vec<String> = names.map(|n| format!("{n:?}")).collect();
@@ -276,14 +276,14 @@ fn record_frame(
     let ctx = || format!("{}: channel {topic:?}", recording.path().display());
     // Time: the record's own `time_s` field (exact) where present, else the log time.
     let mut columns: Vec<Column> = Vec::with_capacity(table.columns.len() + 2);
-    let has_time_field = matches!(table.column("time_s"), Some(McapColumn::F64(_)));
+    let has_time_field = matches!(table.column(TIME_S), Some(McapColumn::F64(_)));
     if !has_time_field {
         let t: Vec<f64> = table
             .log_time_ns
             .iter()
             .map(|&ns| ns as f64 * 1e-9)
             .collect();
-        columns.push(Float64Chunked::from_vec("time_s".into(), t).into_column());
+        columns.push(Float64Chunked::from_vec(TIME_S.into(), t).into_column());
     }
     let mut time_first = None;
     for (name, col) in table.columns {
@@ -292,7 +292,7 @@ fn record_frame(
             McapColumn::U64(v) => UInt64Chunked::from_vec(name.as_str().into(), v).into_column(),
             McapColumn::Str(v) => Column::new(name.as_str().into(), v),
         };
-        if name == "time_s" && has_time_field {
+        if name == TIME_S && has_time_field {
             time_first = Some(column);
         } else {
             columns.push(column);

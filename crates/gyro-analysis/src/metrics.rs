@@ -25,6 +25,10 @@ use crate::load::{
 use crate::rolling::{RollingError, RollingOptions, rolling_error};
 use crate::steady::{SteadyError, SteadyOptions, steady_error};
 use crate::table::Table;
+use gyro_mcap::contract::events as event_fields;
+use gyro_mcap::contract::{
+    compass_state, design_constants_record, result_record, run_record, ship_state, solver_stats,
+};
 
 /// Settings of [`analyze_run`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -503,27 +507,27 @@ pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> 
             topic: COMPASS_TOPIC.to_owned(),
         });
     }
-    let t = run.f64_field(COMPASS_TOPIC, "time_s")?;
-    let err = run.f64_field(COMPASS_TOPIC, "reading_error_rad")?;
-    let tilt = run.f64_field(COMPASS_TOPIC, "tilt_rad").ok();
+    let t = run.f64_field(COMPASS_TOPIC, compass_state::TIME_S)?;
+    let err = run.f64_field(COMPASS_TOPIC, compass_state::READING_ERROR_RAD)?;
+    let tilt = run.f64_field(COMPASS_TOPIC, compass_state::TILT_RAD).ok();
     let file = run.path.display().to_string();
     let mut notes = Vec::new();
 
     let events = events_of(run)?;
     let mut manoeuvre_times: Vec<(f64, &str)> = events
         .iter()
-        .filter(|e| e.manoeuvre != "steady" && e.time_s.is_finite())
+        .filter(|e| e.manoeuvre != event_fields::STEADY && e.time_s.is_finite())
         .map(|e| (e.time_s, e.phase.as_str()))
         .collect();
     manoeuvre_times.sort_by(|a, b| a.0.total_cmp(&b.0));
     let first_start = manoeuvre_times
         .iter()
-        .find(|(_, p)| *p == "start")
+        .find(|(_, p)| *p == event_fields::START)
         .map(|m| m.0);
     let last_end = manoeuvre_times
         .iter()
         .rev()
-        .find(|(_, p)| *p == "end")
+        .find(|(_, p)| *p == event_fields::END)
         .map(|m| m.0);
     let upto = t.partition_point(|v| first_start.is_none_or(|s| *v < s));
 
@@ -542,11 +546,19 @@ pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> 
             f.quality, f.message
         ));
     }
-    let design_period = run.meta_f64("design_constants", "undamped_period_s");
+    let design_period = run.meta_f64(
+        design_constants_record::NAME,
+        design_constants_record::UNDAMPED_PERIOD_S,
+    );
     let period_hint = azimuth
         .period_s
         .map(|p| p.value)
-        .or_else(|| run.meta_f64("design_constants", "mode_period_s"))
+        .or_else(|| {
+            run.meta_f64(
+                design_constants_record::NAME,
+                design_constants_record::MODE_PERIOD_S,
+            )
+        })
         .or(design_period);
 
     // Steady error: after the last manoeuvre (or the whole run).
@@ -575,13 +587,18 @@ pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> 
     let ship_lat = run
         .f64_field(SHIP_TOPIC, "time_s")
         .ok()
-        .zip(run.f64_field(SHIP_TOPIC, "latitude_rad").ok());
+        .zip(run.f64_field(SHIP_TOPIC, ship_state::LATITUDE_RAD).ok());
     let constants = BallisticConstants {
         undamped_period_s: design_period,
         schuler_period_s: run
-            .meta_f64("design_constants", "schuler_period_s")
+            .meta_f64(
+                design_constants_record::NAME,
+                design_constants_record::SCHULER_PERIOD_S,
+            )
             .unwrap_or_else(schuler_period_s),
-        latitude_rad: run.meta_f64("run", "latitude_deg").map(f64::to_radians),
+        latitude_rad: run
+            .meta_f64(run_record::NAME, run_record::LATITUDE_DEG)
+            .map(f64::to_radians),
     };
     let ballistic = ballistic_deviations(
         t,
@@ -601,8 +618,8 @@ pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> 
 
     // Rolling error.
     let rolling = match (
-        run.f64_field(SHIP_TOPIC, "time_s"),
-        run.f64_field(SHIP_TOPIC, "roll_rad"),
+        run.f64_field(SHIP_TOPIC, ship_state::TIME_S),
+        run.f64_field(SHIP_TOPIC, ship_state::ROLL_RAD),
     ) {
         (Ok(st), Ok(roll)) => {
             let mut ro = opts.rolling;
@@ -654,7 +671,7 @@ fn summarise(
     ballistic: &[BallisticDeviation],
     rolling: Option<&RollingError>,
 ) -> RunMetrics {
-    let meta = |k: &str| run.meta("run", k).unwrap_or_default().to_owned();
+    let meta = |k: &str| run.meta(run_record::NAME, k).unwrap_or_default().to_owned();
     let result_f64 = |k: &str| run.result(k).and_then(|s| s.trim().parse::<f64>().ok());
     let v = |e: Option<crate::fit::Estimate>| e.map(|e| e.value);
     let sd = |e: Option<crate::fit::Estimate>| e.map(|e| e.sigma);
@@ -681,14 +698,14 @@ fn summarise(
     RunMetrics {
         run_id: run.run_id.clone(),
         path: run.path.display().to_string(),
-        scene: meta("scene_name"),
-        design: meta("design_name"),
-        design_kind: meta("design_kind"),
-        fidelity: meta("fidelity"),
-        integrator: meta("integrator"),
-        rtol: run.meta_f64("run", "rtol"),
-        atol: run.meta_f64("run", "atol"),
-        effects: meta("effects"),
+        scene: meta(run_record::SCENE_NAME),
+        design: meta(run_record::DESIGN_NAME),
+        design_kind: meta(run_record::DESIGN_KIND),
+        fidelity: meta(run_record::FIDELITY),
+        integrator: meta(run_record::INTEGRATOR),
+        rtol: run.meta_f64(run_record::NAME, run_record::RTOL),
+        atol: run.meta_f64(run_record::NAME, run_record::ATOL),
+        effects: meta(run_record::EFFECTS),
         status: run.status().to_owned(),
         duration_s: duration,
         samples: t.len() as u64,
@@ -716,15 +733,15 @@ fn summarise(
         rolling_error_rad: rolling.and_then(|r| v(r.mean_error)),
         rolling_error_sigma_rad: rolling.and_then(|r| sd(r.mean_error)),
         roll_period_s: rolling.map(|r| r.roll_period_s).filter(|p| p.is_finite()),
-        steps: u64_last(run, SOLVER_TOPIC, "steps")
-            .or_else(|| result_f64("steps").map(|v| v as u64)),
-        rejected_steps: u64_last(run, SOLVER_TOPIC, "rejected_steps"),
-        rhs_evals: u64_last(run, SOLVER_TOPIC, "rhs_evals")
-            .or_else(|| result_f64("rhs_evals").map(|v| v as u64)),
-        jacobian_evals: u64_last(run, SOLVER_TOPIC, "jacobian_evals"),
-        wall_time_s: f64_last(run, SOLVER_TOPIC, "wall_time_s")
-            .or_else(|| result_f64("wall_time_s")),
-        rhs_cost_ns: run.meta_f64("run", "rhs_cost_ns"),
+        steps: u64_last(run, SOLVER_TOPIC, solver_stats::STEPS)
+            .or_else(|| result_f64(result_record::STEPS).map(|v| v as u64)),
+        rejected_steps: u64_last(run, SOLVER_TOPIC, solver_stats::REJECTED_STEPS),
+        rhs_evals: u64_last(run, SOLVER_TOPIC, solver_stats::RHS_EVALS)
+            .or_else(|| result_f64(result_record::RHS_EVALS).map(|v| v as u64)),
+        jacobian_evals: u64_last(run, SOLVER_TOPIC, solver_stats::JACOBIAN_EVALS),
+        wall_time_s: f64_last(run, SOLVER_TOPIC, solver_stats::WALL_TIME_S)
+            .or_else(|| result_f64(result_record::WALL_TIME_S)),
+        rhs_cost_ns: run.meta_f64(run_record::NAME, run_record::RHS_COST_NS),
     }
 }
 

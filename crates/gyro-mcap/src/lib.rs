@@ -16,6 +16,11 @@
 //!   of the shipped `proto/foxglove/*.proto` with `google/protobuf/timestamp.proto`), so Foxglove
 //!   and Rerun's MCAP loader show them.
 //!
+//! # The contract
+//! [`contract`] names what a gyrolab run writes (topics, schemas and their fields, metadata
+//! records and keys, status strings, frames, body shapes): the recorder and every reader take
+//! them from there. The rest of the crate is the container and knows none of them.
+//!
 //! # Time
 //! A message's log time = publish time = the FrameTransform timestamp = **simulation time in
 //! nanoseconds since the run's start**: t = 0 s is 0 ns, which tools that show absolute time
@@ -41,6 +46,7 @@
 //! beyond the bytes present (decompression grows with the bytes produced, capped at 256 MiB per
 //! chunk). The whole file is held in memory while open.
 
+pub mod contract;
 mod decode;
 mod error;
 mod format;
@@ -55,7 +61,5 @@ pub use reader::{
     AttachmentInfo, ChannelInfo, ChannelKind, ChannelTable, PoseTable, RecordTable, Recording,
 };
 pub use recover::{RecoverReport, recover};
-pub use schema::{
-    FRAME_TRANSFORM_FDS, FieldKind, FieldSpec, POSE_SCHEMA_NAME, Pose, RecordSchema, Value,
-};
+pub use schema::{FieldKind, FieldSpec, Pose, RecordSchema, Value};
 pub use writer::{ChannelId, RecordingWriter, WriteSummary, WriterOptions, partial_path};

@@ -9,7 +9,7 @@ use crate::format::{
     Cursor, MAGIC, RawRecord, decompress_chunk, op, parse_attachment, parse_channel, parse_chunk,
     parse_message, parse_metadata, parse_schema,
 };
-use crate::writer::{Sink, WriterOptions, partial_path};
+use crate::writer::{McapWriter, WriterOptions, partial_path};
 
 /// What [`recover`] kept and dropped.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -26,7 +26,7 @@ pub struct RecoverReport {
 }
 
 struct Recoverer {
-    sink: Sink,
+    mcap: McapWriter,
     schema_ids: HashMap<u16, u16>,
     chunks: u64,
 }
@@ -38,7 +38,7 @@ impl Recoverer {
             Err(e) => return Ok(Err(e)),
         };
         if s.id != 0 && !self.schema_ids.contains_key(&s.id) {
-            let new = self.sink.add_schema(&s.name, &s.encoding, &s.data)?;
+            let new = self.mcap.add_schema(&s.name, &s.encoding, &s.data)?;
             self.schema_ids.insert(s.id, new);
         }
         Ok(Ok(()))
@@ -49,7 +49,7 @@ impl Recoverer {
             Ok(c) => c,
             Err(e) => return Ok(Err(e)),
         };
-        if self.sink.slot_of(c.id).is_some() {
+        if self.mcap.slot_of(c.id).is_some() {
             return Ok(Ok(()));
         }
         let schema_id = if c.schema_id == 0 {
@@ -61,16 +61,16 @@ impl Recoverer {
                 None => return Ok(Ok(())),
             }
         };
-        self.sink
+        self.mcap
             .add_channel(c.id, schema_id, &c.topic, &c.message_encoding, &c.metadata)?;
         Ok(Ok(()))
     }
 
     fn message(&mut self, r: &RawRecord) -> Result<(), RecordingError> {
         if let Ok(m) = parse_message(r)
-            && let Some(slot) = self.sink.slot_of(m.channel_id)
+            && let Some(slot) = self.mcap.slot_of(m.channel_id)
         {
-            self.sink
+            self.mcap
                 .write_raw(slot, m.sequence, m.log_time, m.publish_time, m.data)?;
         }
         Ok(())
@@ -102,7 +102,7 @@ impl Recoverer {
             Ok(records) => records,
             Err(e) => return Ok(Err(e)),
         };
-        self.sink.close_chunk()?;
+        self.mcap.close_chunk()?;
         for (opcode, range) in records {
             let body_start = range.start + 9;
             let raw = RawRecord {
@@ -121,7 +121,7 @@ impl Recoverer {
                 return Ok(Err(ParseError::new(r.offset, "chunk", e.expected)));
             }
         }
-        self.sink.close_chunk()?;
+        self.mcap.close_chunk()?;
         self.chunks += 1;
         Ok(Ok(()))
     }
@@ -205,9 +205,9 @@ fn recover_into(
     tmp: &Path,
     defaults: WriterOptions,
 ) -> Result<(u64, u64, u64, Option<String>), RecordingError> {
-    let sink = Sink::create(tmp, &defaults)?;
+    let mcap = McapWriter::create(tmp, &defaults)?;
     let mut rec = Recoverer {
-        sink,
+        mcap,
         schema_ids: HashMap::new(),
         chunks: 0,
     };
@@ -235,12 +235,12 @@ fn recover_into(
             op::MESSAGE => rec.message(&r).map(Ok)?,
             op::CHUNK => rec.chunk(&r, &mut buf)?,
             op::METADATA => match parse_metadata(&r) {
-                Ok(m) => rec.sink.write_metadata(&m.name, &m.metadata).map(Ok)?,
+                Ok(m) => rec.mcap.write_metadata(&m.name, &m.metadata).map(Ok)?,
                 Err(e) => Err(e),
             },
             op::ATTACHMENT => match parse_attachment(&r) {
                 Ok(a) => rec
-                    .sink
+                    .mcap
                     .attach(a.name, a.media_type, a.log_time, a.create_time, a.data)
                     .map(Ok)?,
                 Err(e) => Err(e),
@@ -257,8 +257,8 @@ fn recover_into(
         }
         kept_until = r.end();
     }
-    let messages = rec.sink.message_count();
+    let messages = rec.mcap.message_count();
     let chunks = rec.chunks;
-    rec.sink.finish()?;
+    rec.mcap.finish()?;
     Ok((messages, chunks, kept_until, stopped_because))
 }

@@ -77,12 +77,12 @@ pub struct Pose {
 }
 
 /// The MCAP schema name of pose channels.
-pub const POSE_SCHEMA_NAME: &str = "foxglove.FrameTransform";
+pub(crate) const POSE_SCHEMA_NAME: &str = "foxglove.FrameTransform";
 
 /// The encoded FileDescriptorSet of `foxglove.FrameTransform` with its imports
 /// (foxglove/Vector3, foxglove/Quaternion, google/protobuf/timestamp), compiled from `proto/` at
 /// build time.
-pub const FRAME_TRANSFORM_FDS: &[u8] =
+pub(crate) const FRAME_TRANSFORM_FDS: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/frame_transform.fds"));
 
 fn is_identifier(s: &str) -> bool {

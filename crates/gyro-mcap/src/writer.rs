@@ -1,4 +1,4 @@
-//! Writing recordings: [`RecordingWriter`] (typed channels, the public API) over [`Sink`] (MCAP
+//! Writing recordings: [`RecordingWriter`] (typed channels, the public API) over [`McapWriter`] (MCAP
 //! records, chunking, indexes and the summary; also used by `recover` to re-emit raw messages).
 //!
 //! Why not the `mcap` crate's writer: on the same 1 512 000 messages (6 h of the throughput
@@ -92,7 +92,7 @@ impl Out {
     }
 }
 
-struct SinkChannel {
+struct McapChannel {
     id: u16,
     topic: String,
     sequence: u32,
@@ -169,7 +169,7 @@ fn compress(
         .map_err(io_error(path, "compressing a chunk"))
 }
 
-/// The file side of a sink: the file, and everything whose value depends on positions in it
+/// The file side of an [`McapWriter`]: the file, and everything whose value depends on positions in it
 /// (chunk, attachment and metadata indexes). Runs on a writer thread fed by compressing threads
 /// (see [`spawn_workers`]); the summary is written after it is joined.
 struct FileSide {
@@ -186,7 +186,7 @@ struct FileSide {
 
 /// Writeback while the file grows: after every `sync_every_bytes` the writer thread asks a
 /// syncing thread to `sync_data` a clone of the file handle, and never waits for it, so the
-/// durable sync in [`Sink::finish`] finds little left to write. (Without it that sync waited for
+/// durable sync in [`McapWriter::finish`] finds little left to write. (Without it that sync waited for
 /// the whole file: 0.2 s of the 0.7-s write of the 389-MB throughput bench.)
 struct Syncer {
     ask: mpsc::SyncSender<()>,
@@ -353,7 +353,7 @@ enum FileHandle {
     Gone,
 }
 
-/// The threads of a sink: job `n` goes to compressing thread `n % k`, which compresses chunks
+/// The threads of an [`McapWriter`]: job `n` goes to compressing thread `n % k`, which compresses chunks
 /// and passes everything on; the writer thread takes job `n` from thread `n % k`, so the file is
 /// written in submission order while `k` chunks compress at once.
 struct Workers {
@@ -482,7 +482,7 @@ fn spawn_workers(
 /// MCAP records to a file: chunks with message indexes, then DataEnd, summary and footer. The
 /// caller's side (this struct) encodes messages into the open chunk and keeps per-channel
 /// statistics; the file side compresses and writes, on a worker thread.
-pub(crate) struct Sink {
+pub(crate) struct McapWriter {
     path: PathBuf,
     file: FileHandle,
     chunk_size: usize,
@@ -490,7 +490,7 @@ pub(crate) struct Sink {
     chunk_start_time: u64,
     chunk_end_time: u64,
     touched: Vec<usize>,
-    channels: Vec<SinkChannel>,
+    channels: Vec<McapChannel>,
     slot_of_id: HashMap<u16, usize>,
     /// Summary records, already encoded, by group.
     schema_records: Vec<u8>,
@@ -501,7 +501,7 @@ pub(crate) struct Sink {
     message_end_time: u64,
 }
 
-impl Sink {
+impl McapWriter {
     pub(crate) fn create(path: &Path, opts: &WriterOptions) -> Result<Self, RecordingError> {
         let (chunk_size, zstd_level) = (opts.chunk_size_bytes, opts.zstd_level);
         let file = File::create(path).map_err(io_error(path, "creating"))?;
@@ -527,7 +527,7 @@ impl Sink {
             Ok(workers) => FileHandle::Workers(workers),
             Err(side) => FileHandle::Inline { side, compressor },
         };
-        let mut sink = Self {
+        let mut mcap = Self {
             path: path.to_path_buf(),
             file,
             chunk_size,
@@ -552,8 +552,8 @@ impl Sink {
             concat!("gyrolab gyro-mcap ", env!("CARGO_PKG_VERSION")),
         );
         end_record(&mut b, at);
-        sink.submit(Job::Bytes(b))?;
-        Ok(sink)
+        mcap.submit(Job::Bytes(b))?;
+        Ok(mcap)
     }
 
     pub(crate) fn path(&self) -> &Path {
@@ -699,7 +699,7 @@ impl Sink {
         self.channel_records.extend_from_slice(&b);
         self.submit(Job::Bytes(b))?;
         let slot = self.channels.len();
-        self.channels.push(SinkChannel {
+        self.channels.push(McapChannel {
             id,
             topic: topic.to_owned(),
             sequence: 0,
@@ -953,7 +953,7 @@ impl Sink {
     }
 }
 
-impl Drop for Sink {
+impl Drop for McapWriter {
     /// Lets the worker write what it was given (the open chunk is the owner's business).
     fn drop(&mut self) {
         let _ = self.join();
@@ -961,7 +961,7 @@ impl Drop for Sink {
 }
 
 /// How a channel's messages are encoded, fixed when it is added.
-enum ChannelKind {
+enum ChannelEncoder {
     Record {
         kinds: Vec<FieldKind>,
         tags: Vec<Tag>,
@@ -983,9 +983,9 @@ struct F64Template {
 /// [`finish`](Self::finish). Dropping it without `finish` closes the open chunk (best effort) and
 /// leaves the `.partial` file for [`crate::recover`].
 pub struct RecordingWriter {
-    sink: Sink,
+    mcap: McapWriter,
     final_path: PathBuf,
-    kinds: Vec<ChannelKind>,
+    encoders: Vec<ChannelEncoder>,
     flush_interval_s: f64,
     last_flush: Instant,
     since_clock_check: u32,
@@ -999,11 +999,11 @@ impl RecordingWriter {
     /// Opens `<final_path>.partial` for writing; `finish` renames it to `final_path`.
     pub fn create(final_path: &Path, opts: WriterOptions) -> Result<Self, RecordingError> {
         let partial = partial_path(final_path);
-        let sink = Sink::create(&partial, &opts)?;
+        let mcap = McapWriter::create(&partial, &opts)?;
         Ok(Self {
-            sink,
+            mcap,
             final_path: final_path.to_path_buf(),
-            kinds: Vec::new(),
+            encoders: Vec::new(),
             flush_interval_s: if opts.flush_interval_s.is_finite() {
                 opts.flush_interval_s.max(0.0)
             } else {
@@ -1017,17 +1017,17 @@ impl RecordingWriter {
 
     /// The `.partial` path being written.
     pub fn partial_path(&self) -> &Path {
-        self.sink.path()
+        self.mcap.path()
     }
 
     fn next_channel_id(&self, topic: &str) -> Result<u16, RecordingError> {
-        if (0..self.kinds.len()).any(|slot| self.sink.topic(slot) == topic) {
+        if (0..self.encoders.len()).any(|slot| self.mcap.topic(slot) == topic) {
             return Err(self.usage(
                 format!("adding channel {topic:?}"),
                 "a topic not used by another channel",
             ));
         }
-        u16::try_from(self.kinds.len() + 1).map_err(|_| {
+        u16::try_from(self.encoders.len() + 1).map_err(|_| {
             self.usage(
                 format!("adding channel {topic:?}"),
                 "at most 65535 channels",
@@ -1047,7 +1047,7 @@ impl RecordingWriter {
             .map_err(|e| self.usage(format!("adding channel {topic:?}"), e))?;
         let id = self.next_channel_id(topic)?;
         let schema_id =
-            self.sink
+            self.mcap
                 .add_schema(&schema.full_name, "protobuf", &schema.file_descriptor_set())?;
         let metadata: BTreeMap<String, String> = schema
             .fields
@@ -1055,7 +1055,7 @@ impl RecordingWriter {
             .filter_map(|f| Some((format!("unit.{}", f.name), f.unit.clone()?)))
             .collect();
         let slot = self
-            .sink
+            .mcap
             .add_channel(id, schema_id, topic, "protobuf", &metadata)?;
         let kinds: Vec<FieldKind> = schema.fields.iter().map(|f| f.kind).collect();
         let tags = kinds
@@ -1080,7 +1080,7 @@ impl RecordingWriter {
             }
             F64Template { bytes, value_at }
         });
-        self.kinds.push(ChannelKind::Record {
+        self.encoders.push(ChannelEncoder::Record {
             kinds,
             tags,
             all_f64,
@@ -1092,25 +1092,25 @@ impl RecordingWriter {
     pub fn add_pose_channel(&mut self, topic: &str) -> Result<ChannelId, RecordingError> {
         let id = self.next_channel_id(topic)?;
         let schema_id = self
-            .sink
+            .mcap
             .add_schema(POSE_SCHEMA_NAME, "protobuf", FRAME_TRANSFORM_FDS)?;
         let slot = self
-            .sink
+            .mcap
             .add_channel(id, schema_id, topic, "protobuf", &BTreeMap::new())?;
-        self.kinds.push(ChannelKind::Pose);
+        self.encoders.push(ChannelEncoder::Pose);
         Ok(ChannelId(slot as u32))
     }
 
     fn usage(&self, call: impl Into<String>, expected: impl Into<String>) -> RecordingError {
         RecordingError::Usage {
-            path: self.sink.path().to_path_buf(),
+            path: self.mcap.path().to_path_buf(),
             call: call.into(),
             expected: expected.into(),
         }
     }
 
-    fn channel(&self, ch: ChannelId, call: &str) -> Result<&ChannelKind, RecordingError> {
-        self.kinds
+    fn channel(&self, ch: ChannelId, call: &str) -> Result<&ChannelEncoder, RecordingError> {
+        self.encoders
             .get(ch.0 as usize)
             .ok_or_else(|| self.usage(call, "a channel id returned by this writer"))
     }
@@ -1123,14 +1123,14 @@ impl RecordingWriter {
         values: &[f64],
     ) -> Result<(), RecordingError> {
         let slot = ch.0 as usize;
-        let template = match self.kinds.get(slot) {
-            Some(ChannelKind::Record {
+        let template = match self.encoders.get(slot) {
+            Some(ChannelEncoder::Record {
                 all_f64: Some(t), ..
             }) if t.value_at.len() == values.len() => t,
             _ => return Err(self.f64_misuse(ch, values.len())),
         };
         let buf =
-            self.sink
+            self.mcap
                 .begin_message(slot, None, log_time_ns, log_time_ns, template.bytes.len());
         let start = buf.len();
         buf.extend_from_slice(&template.bytes);
@@ -1143,16 +1143,18 @@ impl RecordingWriter {
 
     #[cold]
     fn f64_misuse(&self, ch: ChannelId, n: usize) -> RecordingError {
-        let topic = self.sink.topic(ch.0 as usize).to_owned();
+        let topic = self.mcap.topic(ch.0 as usize).to_owned();
         let call = format!("write_f64_record on {topic:?}");
-        match self.kinds.get(ch.0 as usize) {
+        match self.encoders.get(ch.0 as usize) {
             None => self.usage(call, "a channel id returned by this writer"),
-            Some(ChannelKind::Pose) => self.usage(call, "a record channel, found a pose channel"),
-            Some(ChannelKind::Record { all_f64: None, .. }) => self.usage(
+            Some(ChannelEncoder::Pose) => {
+                self.usage(call, "a record channel, found a pose channel")
+            }
+            Some(ChannelEncoder::Record { all_f64: None, .. }) => self.usage(
                 call,
                 "a channel whose fields are all F64 (use write_record)",
             ),
-            Some(ChannelKind::Record { tags, .. }) => {
+            Some(ChannelEncoder::Record { tags, .. }) => {
                 self.usage(call, format!("{} values, found {n}", tags.len()))
             }
         }
@@ -1167,8 +1169,8 @@ impl RecordingWriter {
     ) -> Result<(), RecordingError> {
         let slot = ch.0 as usize;
         let call = "write_record";
-        let Some(ChannelKind::Record { kinds, tags, .. }) = self.kinds.get(slot) else {
-            let what = if self.kinds.get(slot).is_some() {
+        let Some(ChannelEncoder::Record { kinds, tags, .. }) = self.encoders.get(slot) else {
+            let what = if self.encoders.get(slot).is_some() {
                 "a record channel, found a pose channel"
             } else {
                 "a channel id returned by this writer"
@@ -1176,7 +1178,7 @@ impl RecordingWriter {
             return Err(self.usage(call, what));
         };
         if kinds.len() != values.len() {
-            let topic = self.sink.topic(slot);
+            let topic = self.mcap.topic(slot);
             return Err(self.usage(
                 format!("write_record on {topic:?}"),
                 format!("{} values, found {}", kinds.len(), values.len()),
@@ -1190,7 +1192,7 @@ impl RecordingWriter {
                     (FieldKind::U64, Value::U64(x)) => varint_len(*x),
                     (FieldKind::Str, Value::Str(s)) => varint_len(s.len() as u64) + s.len(),
                     _ => {
-                        let topic = self.sink.topic(slot);
+                        let topic = self.mcap.topic(slot);
                         return Err(self.usage(
                             format!("write_record on {topic:?}"),
                             format!("value {i} of kind {kind:?}, found {v:?}"),
@@ -1199,7 +1201,7 @@ impl RecordingWriter {
                 };
         }
         let buf = self
-            .sink
+            .mcap
             .begin_message(slot, None, log_time_ns, log_time_ns, len);
         for (tag, v) in tags.iter().zip(values) {
             buf.extend_from_slice(tag.as_slice());
@@ -1223,8 +1225,8 @@ impl RecordingWriter {
         pose: &Pose,
     ) -> Result<(), RecordingError> {
         let slot = ch.0 as usize;
-        if !matches!(self.channel(ch, "write_pose")?, ChannelKind::Pose) {
-            let topic = self.sink.topic(slot);
+        if !matches!(self.channel(ch, "write_pose")?, ChannelEncoder::Pose) {
+            let topic = self.mcap.topic(slot);
             return Err(self.usage(
                 format!("write_pose on {topic:?}"),
                 "a pose channel, found a record channel",
@@ -1232,7 +1234,7 @@ impl RecordingWriter {
         }
         let len = pose_encoded_len(log_time_ns, pose);
         let buf = self
-            .sink
+            .mcap
             .begin_message(slot, None, log_time_ns, log_time_ns, len);
         let start = buf.len();
         buf.resize(start + len, 0);
@@ -1242,7 +1244,7 @@ impl RecordingWriter {
 
     #[inline]
     fn after_message(&mut self) -> Result<(), RecordingError> {
-        if self.sink.chunk_is_full() {
+        if self.mcap.chunk_is_full() {
             return self.close_chunk();
         }
         self.since_clock_check += 1;
@@ -1259,7 +1261,7 @@ impl RecordingWriter {
     fn close_chunk(&mut self) -> Result<(), RecordingError> {
         self.last_flush = Instant::now();
         self.since_clock_check = 0;
-        self.sink.close_chunk()
+        self.mcap.close_chunk()
     }
 
     /// Closes the open chunk now and returns once it (and everything before it) is written and
@@ -1269,7 +1271,7 @@ impl RecordingWriter {
     pub fn flush_chunk(&mut self) -> Result<(), RecordingError> {
         self.last_flush = Instant::now();
         self.since_clock_check = 0;
-        self.sink.flush_chunk()
+        self.mcap.flush_chunk()
     }
 
     /// A named metadata record (e.g. "scene" → its TOML text and settings).
@@ -1278,7 +1280,7 @@ impl RecordingWriter {
         name: &str,
         entries: &BTreeMap<String, String>,
     ) -> Result<(), RecordingError> {
-        self.sink.write_metadata(name, entries)
+        self.mcap.write_metadata(name, entries)
     }
 
     /// An attachment (e.g. the scene file). Its create time is recorded as 0.
@@ -1289,15 +1291,15 @@ impl RecordingWriter {
         log_time_ns: u64,
         data: &[u8],
     ) -> Result<(), RecordingError> {
-        self.sink.attach(name, media_type, log_time_ns, 0, data)
+        self.mcap.attach(name, media_type, log_time_ns, 0, data)
     }
 
     /// Writes the summary and indexes, syncs, and renames `.partial` to the final path. Callable at
     /// any point of a run (e.g. after Ctrl-C).
     pub fn finish(mut self) -> Result<WriteSummary, RecordingError> {
         self.finished = true;
-        let bytes = self.sink.finish()?;
-        let partial = self.sink.path().to_path_buf();
+        let bytes = self.mcap.finish()?;
+        let partial = self.mcap.path().to_path_buf();
         std::fs::rename(&partial, &self.final_path)
             .map_err(io_error(&partial, "renaming to the final name"))?;
         if let Some(dir) = self.final_path.parent() {
@@ -1313,7 +1315,7 @@ impl RecordingWriter {
         Ok(WriteSummary {
             path: self.final_path.clone(),
             bytes,
-            messages: self.sink.message_count(),
+            messages: self.mcap.message_count(),
         })
     }
 }
@@ -1322,7 +1324,7 @@ impl Drop for RecordingWriter {
     fn drop(&mut self) {
         if !self.finished {
             // Best effort: keep what was written so far for `recover`.
-            let _ = self.sink.flush_chunk();
+            let _ = self.mcap.flush_chunk();
         }
     }
 }
@@ -1334,7 +1336,7 @@ pub fn partial_path(final_path: &Path) -> PathBuf {
     PathBuf::from(s)
 }
 
-impl Sink {
+impl McapWriter {
     /// Re-emits a raw message (used by `recover`).
     pub(crate) fn write_raw(
         &mut self,

@@ -32,7 +32,7 @@ pub use design::{CoordinateRole, Design, Root, Shape, SpinMode};
 pub use earth::{BaseEffects, Moored, ShipKinematics, ShipMotion};
 pub use error::InputError;
 pub use model::{
-    CompiledModel, EFFECT_NAMES, Effects, Fidelity, InitialCondition, ModelError, ModelOptions,
-    Readout,
+    BodyPose, CompiledModel, EFFECT_NAMES, Effects, Fidelity, InitialCondition, ModelError,
+    ModelOptions, Readout,
 };
 pub use real::{Jet, Real};

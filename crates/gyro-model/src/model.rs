@@ -230,7 +230,17 @@ pub struct Readout {
     pub qd: Vec<f64>,
     /// Every body's pose as [`CompiledModel::body_poses`] gives it (the reading needs them, so
     /// a recorder need not compute them again).
-    pub poses: Vec<([[f64; 3]; 3], [f64; 3])>,
+    pub poses: Vec<BodyPose>,
+}
+
+/// Where a body is at one instant: `point_in_world = world_from_body · point_in_body +
+/// origin_m`, world axes (the local level frame at the pivot, North–West–Up).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyPose {
+    /// Rotation from the body's axes to the world's (rows are world axes).
+    pub world_from_body: [[f64; 3]; 3],
+    /// The body's origin relative to the pivot, world axes, metres.
+    pub origin_m: [f64; 3],
 }
 
 #[derive(Clone, Debug)]
@@ -1319,16 +1329,23 @@ impl<M: ShipMotion> CompiledModel<M> {
         self.base_at(t).2
     }
 
-    /// Poses of all bodies: (world_from_body rotation, origin relative to pivot) at a state.
-    pub fn body_poses(&self, t: f64, q_full: &[f64]) -> Vec<([[f64; 3]; 3], [f64; 3])> {
+    /// Poses of all bodies at a state, by body index.
+    pub fn body_poses(&self, t: f64, q_full: &[f64]) -> Vec<BodyPose> {
         body_poses(&self.chain, q_full, &M3(self.world_from_base(t)))
+            .into_iter()
+            .map(|(world_from_body, origin_m)| BodyPose {
+                world_from_body,
+                origin_m,
+            })
+            .collect()
     }
 
     /// The compass reading at a state.
     pub fn readout(&self, t: f64, x: &[f64]) -> Readout {
         let (q, qd) = self.full_coordinates(t, x);
         let poses = self.body_poses(t, &q);
-        let s = M3(poses[self.design.reading_body].0).mul_v(&V3(self.design.reading_axis));
+        let s = M3(poses[self.design.reading_body].world_from_body)
+            .mul_v(&V3(self.design.reading_axis));
         let err = s.0[1].atan2(s.0[0]);
         let tilt = (-s.0[2]).clamp(-1.0, 1.0).asin();
         let k = self.motion.kinematics(t);

@@ -15,6 +15,6 @@ pub mod scene;
 pub mod solvers;
 
 pub use record::{RecordOptions, RecordSummary, record};
-pub use run::{RunError, RunStats, Simulation};
+pub use run::{RunError, RunObserver, RunStats, Simulation};
 pub use scene::{Scene, SceneOverrides};
 pub mod accuracy;

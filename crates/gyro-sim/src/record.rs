@@ -3,12 +3,17 @@
 //! the scene and design files as attachments. Written to `NAME.mcap.partial`, renamed on success;
 //! an interrupted run (Ctrl-C) still closes a valid file and records how far it got.
 
-use crate::run::{RunError, RunStats, Simulation};
+use crate::program::ShipProgram;
+use crate::run::{ManoeuvreEvent, Progress, RunError, RunObserver, RunProbe, RunStats, Simulation};
 use crate::scene::Scene;
 use crate::solvers::StopReason;
-use gyro_mcap::{FieldSpec, Pose, RecordSchema, RecordingWriter, Value, WriterOptions};
+use gyro_mcap::contract::{
+    BodyShape, attachments, bodies_record, compass_state, design_constants_record, design_record,
+    events, result_record, run_record, scene_record, ship_state, solver_stats, status, tf,
+};
+use gyro_mcap::{ChannelId, Pose, RecordingError, RecordingWriter, Value, WriterOptions};
 use gyro_model::constants::{EARTH_RADIUS_M, schuler_period_s};
-use gyro_model::{Root, ShipMotion};
+use gyro_model::{BodyPose, CompiledModel, Root, ShipKinematics, ShipMotion};
 use std::collections::BTreeMap;
 use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
@@ -21,7 +26,7 @@ pub const PROGRAM_VERSION: &str = env!("CARGO_PKG_VERSION");
 
 /// Simulated seconds between two progress reports on `/solver/stats` (the first sample at or
 /// after each multiple of this, before the end, carries one; the end carries the final one).
-pub const SOLVER_STATS_EVERY_S: f64 = 3600.0;
+pub const SOLVER_STATS_EVERY_S: f64 = solver_stats::REPORT_EVERY_S;
 
 /// Options of a recorded run.
 #[derive(Default)]
@@ -97,402 +102,454 @@ fn mat_t_vec(a: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
 }
 
 /// Runs `scene` and records it to `out` (which should end in `.mcap`).
-pub fn record(
-    scene: &Scene,
-    out: &Path,
-    mut opts: RecordOptions,
-) -> Result<RecordSummary, RunError> {
+pub fn record(scene: &Scene, out: &Path, opts: RecordOptions) -> Result<RecordSummary, RunError> {
     let started = Instant::now();
     let sim = Simulation::new(scene)?;
-    let model = &sim.model;
     let rhs_cost_ns = sim.rhs_cost_ns();
-    let rec_err = |e: gyro_mcap::RecordingError| RunError::Record(e.to_string());
-    let mut w = RecordingWriter::create(out, opts.writer).map_err(rec_err)?;
-
-    // Channels.
-    let coords: Vec<String> = model
-        .design
-        .coordinates
-        .iter()
-        .map(|c| c.name.clone())
-        .collect();
-    let mut fields = vec![
-        FieldSpec::f64("time_s", "s"),
-        FieldSpec::f64("reading_error_rad", "rad"),
-        FieldSpec::f64("compass_heading_rad", "rad"),
-        FieldSpec::f64("true_heading_rad", "rad"),
-        FieldSpec::f64("tilt_rad", "rad"),
-    ];
-    for c in &coords {
-        fields.push(FieldSpec::f64(&format!("{c}_rad"), "rad"));
+    let mut recorder = Recorder::create(&sim, scene, out, rhs_cost_ns, opts)?;
+    let result = sim.observe(scene.method, &scene.tolerances, &mut recorder);
+    if let Some(e) = recorder.error.take() {
+        return Err(rec_err(e));
     }
-    for c in &coords {
-        fields.push(FieldSpec::f64(&format!("{c}_rate_rad_per_s"), "rad/s"));
+    // On a solver error the `.partial` file stays for `gyrolab recover`; nothing appears under
+    // the final name.
+    let stats = result?;
+    if let Some(e) = recorder.error.take() {
+        return Err(rec_err(e));
     }
-    let compass_ch = w
-        .add_record_channel(
-            "/compass/state",
-            &RecordSchema {
-                full_name: "gyrolab.CompassState".into(),
-                fields,
-            },
-        )
-        .map_err(rec_err)?;
-    let ship_fields = [
-        ("time_s", "s"),
-        ("latitude_rad", "rad"),
-        ("longitude_rad", "rad"),
-        ("heading_rad", "rad"),
-        ("speed_m_per_s", "m/s"),
-        ("roll_rad", "rad"),
-        ("pitch_rad", "rad"),
-        ("gravity_north_m_per_s2", "m/s^2"),
-        ("gravity_west_m_per_s2", "m/s^2"),
-        ("gravity_up_m_per_s2", "m/s^2"),
-    ]
-    .iter()
-    .map(|(n, u)| FieldSpec::f64(n, u))
-    .collect();
-    let ship_ch = w
-        .add_record_channel(
-            "/ship/state",
-            &RecordSchema {
-                full_name: "gyrolab.ShipState".into(),
-                fields: ship_fields,
-            },
-        )
-        .map_err(rec_err)?;
-    let event_ch = w
-        .add_record_channel(
-            "/events",
-            &RecordSchema {
-                full_name: "gyrolab.ManoeuvreEvent".into(),
-                fields: vec![
-                    FieldSpec::f64("time_s", "s"),
-                    FieldSpec::str("phase"),
-                    FieldSpec::str("manoeuvre"),
-                    FieldSpec::u64("segment"),
-                    FieldSpec::str("description"),
-                    FieldSpec::f64("speed_before_m_per_s", "m/s"),
-                    FieldSpec::f64("speed_after_m_per_s", "m/s"),
-                    FieldSpec::f64("heading_before_rad", "rad"),
-                    FieldSpec::f64("heading_after_rad", "rad"),
-                    FieldSpec::f64("duration_s", "s"),
-                ],
-            },
-        )
-        .map_err(rec_err)?;
-    let stats_ch = w
-        .add_record_channel(
-            "/solver/stats",
-            &RecordSchema {
-                full_name: "gyrolab.SolverStats".into(),
-                fields: vec![
-                    FieldSpec::f64("time_s", "s"),
-                    FieldSpec::u64("steps"),
-                    FieldSpec::u64("rejected_steps"),
-                    FieldSpec::u64("rhs_evals"),
-                    FieldSpec::u64("jacobian_evals"),
-                    FieldSpec::f64("wall_time_s", "s"),
-                ],
-            },
-        )
-        .map_err(rec_err)?;
-    let tf_ch = w.add_pose_channel("/tf").map_err(rec_err)?;
+    let summary = recorder.writer.finish().map_err(rec_err)?;
+    Ok(RecordSummary {
+        path: summary.path,
+        bytes: summary.bytes,
+        messages: summary.messages,
+        interrupted_at_s: interrupted_at_s(&stats),
+        stats,
+        rhs_cost_ns,
+        effects: sim.model.effects.names(),
+        wall_time_s: started.elapsed().as_secs_f64(),
+    })
+}
 
-    // Static metadata first (a recovered file keeps it).
-    let mut scene_md = BTreeMap::new();
-    scene_md.insert("toml".to_string(), scene.source_text.clone());
-    scene_md.insert("path".to_string(), scene.source_path.clone());
-    w.write_metadata("scene", &scene_md).map_err(rec_err)?;
-    let mut design_md = BTreeMap::new();
-    design_md.insert("toml".to_string(), model.design.source_text.clone());
-    design_md.insert("path".to_string(), scene.design_path.clone());
-    design_md.insert(
-        "overrides".to_string(),
-        scene
-            .design_overrides
-            .iter()
-            .map(|(k, v)| format!("{k} = {v}"))
-            .collect::<Vec<_>>()
-            .join("; "),
-    );
-    w.write_metadata("design", &design_md).map_err(rec_err)?;
-    let mut bodies_md = BTreeMap::new();
-    for b in &model.design.bodies {
-        let parent = match b.parent {
-            Some(p) => model.design.bodies[p].name.clone(),
-            None => {
-                if model.design.root == Root::Ship {
-                    "ship".into()
-                } else {
-                    "earth".into()
-                }
-            }
-        };
-        bodies_md.insert(format!("{}.parent", b.name), parent);
-        bodies_md.insert(format!("{}.shape", b.name), shape_toml(&b.shape));
-        if let Some(r) = &b.rotor {
-            bodies_md.insert(format!("{}.spin_axis", b.name), format!("{:?}", r.axis));
-            bodies_md.insert(
-                format!("{}.spin_rad_per_s", b.name),
-                format!("{}", r.spin_rad_per_s),
-            );
-        }
+fn rec_err(e: RecordingError) -> RunError {
+    RunError::Record(e.to_string())
+}
+
+fn interrupted_at_s(stats: &RunStats) -> Option<f64> {
+    match stats.stop {
+        StopReason::Interrupted { t } => Some(t),
+        StopReason::Finished => None,
     }
-    w.write_metadata("bodies", &bodies_md).map_err(rec_err)?;
-    w.write_metadata("design_constants", &design_constants(&sim, scene))
-        .map_err(rec_err)?;
-    w.write_metadata("run", &run_metadata(&sim, scene, &coords, rhs_cost_ns))
-        .map_err(rec_err)?;
-    w.attach(
-        "scene.toml",
-        "application/toml",
-        0,
-        scene.source_text.as_bytes(),
-    )
-    .map_err(rec_err)?;
-    w.attach(
-        "design.toml",
-        "application/toml",
-        0,
-        model.design.source_text.as_bytes(),
-    )
-    .map_err(rec_err)?;
+}
 
-    // Events, written when the run passes them (so log times stay ordered).
-    let mut events: Vec<(f64, Vec<OwnedValue>)> = Vec::new();
-    let segs = &scene.program.segments;
-    for (i, s) in segs.iter().enumerate() {
-        if s.manoeuvre == "steady" {
-            continue;
-        }
-        let (_, v1, h1) = crate::program::ShipProgram::end_state(s);
-        for (phase, t) in [("start", s.start_s), ("end", s.start_s + s.duration_s)] {
-            if t > scene.duration_s {
-                continue;
-            }
-            events.push((
-                t,
-                vec![
-                    OwnedValue::F64(t),
-                    OwnedValue::Str(phase.into()),
-                    OwnedValue::Str(s.manoeuvre.clone()),
-                    OwnedValue::U64(i as u64),
-                    OwnedValue::Str(s.description.clone()),
-                    OwnedValue::F64(s.speed0_m_per_s),
-                    OwnedValue::F64(v1),
-                    OwnedValue::F64(s.heading0_rad),
-                    OwnedValue::F64(h1),
-                    OwnedValue::F64(s.duration_s),
-                ],
-            ));
-        }
-    }
-    let mut next_event = 0;
+/// The channels of a recording.
+struct Channels {
+    compass: ChannelId,
+    ship: ChannelId,
+    events: ChannelId,
+    solver_stats: ChannelId,
+    tf: ChannelId,
+}
 
-    let pose_every = pose_every_n_samples(scene);
-    let n_compass = 5 + 2 * coords.len();
-    let mut compass_vals = vec![0.0; n_compass];
-    let mut ship_vals = [0.0; 10];
-    let mut longitude = scene.start_longitude_rad;
-    let mut last: Option<(f64, f64)> = None; // (t, lon rate)
-    let mut sample = 0u64;
-    let mut write_error: Option<RunError> = None;
-    let mut last_progress = Instant::now();
-    let names: Vec<String> = model.design.bodies.iter().map(|b| b.name.clone()).collect();
-    let parents: Vec<String> = model
-        .design
-        .bodies
-        .iter()
-        .map(|b| match b.parent {
-            Some(p) => names[p].clone(),
-            None => {
-                if model.design.root == Root::Ship {
-                    "ship".into()
-                } else {
-                    "earth".into()
-                }
-            }
+impl Channels {
+    fn add(w: &mut RecordingWriter, coordinates: &[String]) -> Result<Channels, RecordingError> {
+        Ok(Channels {
+            compass: w
+                .add_record_channel(compass_state::TOPIC, &compass_state::schema(coordinates))?,
+            ship: w.add_record_channel(ship_state::TOPIC, &ship_state::schema())?,
+            events: w.add_record_channel(events::TOPIC, &events::schema())?,
+            solver_stats: w.add_record_channel(solver_stats::TOPIC, &solver_stats::schema())?,
+            tf: w.add_pose_channel(tf::TOPIC)?,
         })
-        .collect();
-    // One pose message per frame, built once: a sample only updates the numbers (no frame id
-    // strings are copied per sample).
-    let mut ship_pose = Pose {
-        parent_frame: "earth".into(),
-        child_frame: "ship".into(),
-        translation_m: [0.0; 3],
-        rotation_xyzw: [0.0, 0.0, 0.0, 1.0],
-    };
-    let mut body_pose_msgs: Vec<Pose> = names
-        .iter()
-        .zip(&parents)
-        .map(|(name, parent)| Pose {
-            parent_frame: parent.clone(),
-            child_frame: name.clone(),
+    }
+}
+
+/// One pose message per frame, built once: a sample only updates the numbers (no frame id
+/// strings are copied per sample).
+struct PoseMessages {
+    ship: Pose,
+    /// By body index.
+    bodies: Vec<Pose>,
+}
+
+impl PoseMessages {
+    fn new(model: &CompiledModel<ShipProgram>) -> PoseMessages {
+        let frame = |parent: &str, child: &str| Pose {
+            parent_frame: parent.into(),
+            child_frame: child.into(),
             translation_m: [0.0; 3],
             rotation_xyzw: [0.0, 0.0, 0.0, 1.0],
-        })
-        .collect();
-
-    let interrupt = opts.interrupt.clone();
-    let mut next_stats_s = SOLVER_STATS_EVERY_S;
-    let result = sim.run_with_progress(scene.method, &scene.tolerances, |t, x, probe| {
-        let mut step = || -> Result<(), gyro_mcap::RecordingError> {
-            while next_event < events.len() && events[next_event].0 <= t + 1e-9 {
-                let vals: Vec<Value> = events[next_event]
-                    .1
-                    .iter()
-                    .map(OwnedValue::as_value)
-                    .collect();
-                w.write_record(event_ch, ns(events[next_event].0), &vals)?;
-                next_event += 1;
-            }
-            let r = model.readout(t, x);
-            compass_vals[0] = t;
-            compass_vals[1] = r.reading_error_rad;
-            compass_vals[2] = r.compass_heading_rad;
-            compass_vals[3] = r.true_heading_rad;
-            compass_vals[4] = r.tilt_rad;
-            compass_vals[5..5 + coords.len()].copy_from_slice(&r.q);
-            compass_vals[5 + coords.len()..].copy_from_slice(&r.qd);
-            w.write_f64_record(compass_ch, ns(t), &compass_vals)?;
-            let k = model.motion.kinematics(t);
-            let lon_rate =
-                k.speed_m_per_s * k.heading_rad.sin() / (EARTH_RADIUS_M * k.latitude_rad.cos());
-            if let Some((t0, r0)) = last {
-                longitude += 0.5 * (r0 + lon_rate) * (t - t0);
-            }
-            last = Some((t, lon_rate));
-            let g = model.apparent_gravity(t);
-            ship_vals = [
-                t,
-                k.latitude_rad,
-                longitude,
-                k.heading_rad,
-                k.speed_m_per_s,
-                k.roll_rad,
-                k.pitch_rad,
-                g[0],
-                g[1],
-                g[2],
-            ];
-            w.write_f64_record(ship_ch, ns(t), &ship_vals)?;
-            if sample.is_multiple_of(pose_every) {
-                let base = model.world_from_base(t);
-                let ship = if model.design.root == Root::Ship {
-                    base
-                } else {
-                    gyro_model::earth::world_from_ship(&k, &model.effects.base).0
-                };
-                ship_pose.rotation_xyzw = quat_from_matrix(&ship);
-                w.write_pose(tf_ch, ns(t), &ship_pose)?;
-                let poses = &r.poses;
-                for (bi, (rot, pos)) in poses.iter().enumerate() {
-                    // parent_from_child = parent_worldᵀ · child_world.
-                    let (prot, ppos) = match model.design.bodies[bi].parent {
-                        Some(p) => (poses[p].0, poses[p].1),
-                        None => (base, [0.0; 3]),
-                    };
-                    let rel = mat_t_mul(&prot, rot);
-                    let d = [pos[0] - ppos[0], pos[1] - ppos[1], pos[2] - ppos[2]];
-                    let msg = &mut body_pose_msgs[bi];
-                    msg.translation_m = mat_t_vec(&prot, d);
-                    msg.rotation_xyzw = quat_from_matrix(&rel);
-                    w.write_pose(tf_ch, ns(t), msg)?;
-                }
-            }
-            if t >= next_stats_s && t < scene.duration_s {
-                // A progress report: the work so far.
-                let p = probe.progress();
-                w.write_record(
-                    stats_ch,
-                    ns(t),
-                    &[
-                        Value::F64(t),
-                        Value::U64(p.steps),
-                        Value::U64(p.rejected_steps),
-                        Value::U64(p.rhs_evals),
-                        Value::U64(p.jacobian_evals),
-                        Value::F64(p.wall_time_s),
-                    ],
-                )?;
-                next_stats_s = ((t / SOLVER_STATS_EVERY_S).floor() + 1.0) * SOLVER_STATS_EVERY_S;
-            }
-            Ok(())
         };
-        if let Err(e) = step() {
-            write_error = Some(RunError::Record(e.to_string()));
+        PoseMessages {
+            ship: frame(tf::EARTH_FRAME, tf::SHIP_FRAME),
+            bodies: (0..model.design.bodies.len())
+                .map(|bi| frame(parent_frame(model, bi), &model.design.bodies[bi].name))
+                .collect(),
+        }
+    }
+}
+
+/// The frame a body's pose is given in: its parent body, or the ship or the earth for the
+/// chain's root.
+fn parent_frame(model: &CompiledModel<ShipProgram>, body: usize) -> &str {
+    let design = &model.design;
+    match design.bodies[body].parent {
+        Some(p) => &design.bodies[p].name,
+        None if design.root == Root::Ship => tf::SHIP_FRAME,
+        None => tf::EARTH_FRAME,
+    }
+}
+
+/// The longitude, which no physics depends on, integrated along the track for the record (trapezoids
+/// between samples).
+struct Longitude {
+    rad: f64,
+    /// The previous sample's time and longitude rate.
+    last: Option<(f64, f64)>,
+}
+
+impl Longitude {
+    fn advance(&mut self, t: f64, k: &ShipKinematics<f64>) -> f64 {
+        let rate = k.speed_m_per_s * k.heading_rad.sin() / (EARTH_RADIUS_M * k.latitude_rad.cos());
+        if let Some((t0, r0)) = self.last {
+            self.rad += 0.5 * (r0 + rate) * (t - t0);
+        }
+        self.last = Some((t, rate));
+        self.rad
+    }
+}
+
+/// Records one run: the run's observer, writing every event and sample as the run reports them
+/// and the final statistics and the `result` record when it ends. Write errors are kept in
+/// `error` (the first one stops the run).
+struct Recorder<'s, 'p> {
+    sim: &'s Simulation,
+    scene: &'s Scene,
+    writer: RecordingWriter,
+    channels: Channels,
+    /// The compass record of the sample, reused.
+    compass_values: Vec<f64>,
+    longitude: Longitude,
+    poses: PoseMessages,
+    pose_every: u64,
+    samples: u64,
+    next_stats_s: f64,
+    error: Option<RecordingError>,
+    interrupt: Option<Arc<AtomicBool>>,
+    progress: Option<&'p mut dyn FnMut(f64)>,
+    last_progress: Instant,
+}
+
+impl<'s, 'p> Recorder<'s, 'p> {
+    /// Opens the file with its channels, metadata and attachments (so a recovered file of a run
+    /// killed at once keeps them).
+    fn create(
+        sim: &'s Simulation,
+        scene: &'s Scene,
+        out: &Path,
+        rhs_cost_ns: f64,
+        opts: RecordOptions<'p>,
+    ) -> Result<Recorder<'s, 'p>, RunError> {
+        let model = &sim.model;
+        let mut writer = RecordingWriter::create(out, opts.writer).map_err(rec_err)?;
+        let coordinates: Vec<String> = model
+            .design
+            .coordinates
+            .iter()
+            .map(|c| c.name.clone())
+            .collect();
+        let channels = Channels::add(&mut writer, &coordinates).map_err(rec_err)?;
+        write_static_metadata(&mut writer, sim, scene, &coordinates, rhs_cost_ns)
+            .map_err(rec_err)?;
+        Ok(Recorder {
+            sim,
+            scene,
+            writer,
+            channels,
+            compass_values: vec![0.0; compass_state::LEADING_FIELDS + 2 * coordinates.len()],
+            longitude: Longitude {
+                rad: scene.start_longitude_rad,
+                last: None,
+            },
+            poses: PoseMessages::new(model),
+            pose_every: pose_every_n_samples(scene),
+            samples: 0,
+            next_stats_s: SOLVER_STATS_EVERY_S,
+            error: None,
+            interrupt: opts.interrupt,
+            progress: opts.progress,
+            last_progress: Instant::now(),
+        })
+    }
+
+    fn write_event(&mut self, event: &ManoeuvreEvent) -> Result<(), RecordingError> {
+        let s = event.segment;
+        let phase = if event.is_start {
+            events::START
+        } else {
+            events::END
+        };
+        self.writer.write_record(
+            self.channels.events,
+            ns(event.time_s),
+            &[
+                Value::F64(event.time_s),
+                Value::Str(phase),
+                Value::Str(&s.manoeuvre),
+                Value::U64(event.segment_index as u64),
+                Value::Str(&s.description),
+                Value::F64(s.speed0_m_per_s),
+                Value::F64(event.speed_after_m_per_s),
+                Value::F64(s.heading0_rad),
+                Value::F64(event.heading_after_rad),
+                Value::F64(s.duration_s),
+            ],
+        )
+    }
+
+    fn write_sample(&mut self, t: f64, x: &[f64], probe: &RunProbe) -> Result<(), RecordingError> {
+        let model = &self.sim.model;
+        let r = model.readout(t, x);
+        let n = r.q.len();
+        let c = &mut self.compass_values;
+        c[..compass_state::LEADING_FIELDS].copy_from_slice(&[
+            t,
+            r.reading_error_rad,
+            r.compass_heading_rad,
+            r.true_heading_rad,
+            r.tilt_rad,
+        ]);
+        c[compass_state::LEADING_FIELDS..compass_state::LEADING_FIELDS + n].copy_from_slice(&r.q);
+        c[compass_state::LEADING_FIELDS + n..].copy_from_slice(&r.qd);
+        self.writer
+            .write_f64_record(self.channels.compass, ns(t), &self.compass_values)?;
+        let k = model.motion.kinematics(t);
+        let longitude = self.longitude.advance(t, &k);
+        let g = model.apparent_gravity(t);
+        let ship = [
+            t,
+            k.latitude_rad,
+            longitude,
+            k.heading_rad,
+            k.speed_m_per_s,
+            k.roll_rad,
+            k.pitch_rad,
+            g[0],
+            g[1],
+            g[2],
+        ];
+        self.writer
+            .write_f64_record(self.channels.ship, ns(t), &ship)?;
+        if self.samples.is_multiple_of(self.pose_every) {
+            self.write_poses(t, &k, &r.poses)?;
+        }
+        if t >= self.next_stats_s && t < self.scene.duration_s {
+            // A progress report: the work so far.
+            self.write_solver_stats(t, &probe.progress())?;
+            self.next_stats_s = ((t / SOLVER_STATS_EVERY_S).floor() + 1.0) * SOLVER_STATS_EVERY_S;
+        }
+        Ok(())
+    }
+
+    /// The ship in the earth frame, then every body in its parent frame.
+    fn write_poses(
+        &mut self,
+        t: f64,
+        k: &ShipKinematics<f64>,
+        poses: &[BodyPose],
+    ) -> Result<(), RecordingError> {
+        let model = &self.sim.model;
+        let base = model.world_from_base(t);
+        let ship = if model.design.root == Root::Ship {
+            base
+        } else {
+            gyro_model::earth::world_from_ship(k, &model.effects.base).0
+        };
+        self.poses.ship.rotation_xyzw = quat_from_matrix(&ship);
+        self.writer
+            .write_pose(self.channels.tf, ns(t), &self.poses.ship)?;
+        for (bi, pose) in poses.iter().enumerate() {
+            let (rot, pos) = (&pose.world_from_body, &pose.origin_m);
+            // parent_from_child = parent_worldᵀ · child_world.
+            let (prot, ppos) = match model.design.bodies[bi].parent {
+                Some(p) => (poses[p].world_from_body, poses[p].origin_m),
+                None => (base, [0.0; 3]),
+            };
+            let rel = mat_t_mul(&prot, rot);
+            let d = [pos[0] - ppos[0], pos[1] - ppos[1], pos[2] - ppos[2]];
+            let msg = &mut self.poses.bodies[bi];
+            msg.translation_m = mat_t_vec(&prot, d);
+            msg.rotation_xyzw = quat_from_matrix(&rel);
+            self.writer.write_pose(self.channels.tf, ns(t), msg)?;
+        }
+        Ok(())
+    }
+
+    fn write_solver_stats(&mut self, t: f64, p: &Progress) -> Result<(), RecordingError> {
+        self.writer.write_record(
+            self.channels.solver_stats,
+            ns(t),
+            &[
+                Value::F64(t),
+                Value::U64(p.steps),
+                Value::U64(p.rejected_steps),
+                Value::U64(p.rhs_evals),
+                Value::U64(p.jacobian_evals),
+                Value::F64(p.wall_time_s),
+            ],
+        )
+    }
+
+    /// The final statistics at the end (or where the run stopped) and the `result` record.
+    fn write_end(&mut self, stats: &RunStats) -> Result<(), RecordingError> {
+        let interrupted_at_s = interrupted_at_s(stats);
+        let end_t = interrupted_at_s.unwrap_or(self.scene.duration_s);
+        let s = &stats.solver;
+        let final_stats = Progress {
+            steps: s.steps,
+            rejected_steps: s.rejected_steps,
+            rhs_evals: s.rhs_evals,
+            jacobian_evals: s.jacobian_evals,
+            wall_time_s: s.wall_time_s,
+        };
+        self.write_solver_stats(end_t, &final_stats)?;
+        let status = match interrupted_at_s {
+            Some(t) => status::interrupted_at(t),
+            None => status::COMPLETE.into(),
+        };
+        let result: BTreeMap<String, String> = [
+            (result_record::STATUS, status),
+            (result_record::STEPS, s.steps.to_string()),
+            (result_record::REJECTED_STEPS, s.rejected_steps.to_string()),
+            (result_record::RHS_EVALS, s.rhs_evals.to_string()),
+            (result_record::JACOBIAN_EVALS, s.jacobian_evals.to_string()),
+            (result_record::WALL_TIME_S, format!("{}", s.wall_time_s)),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect();
+        self.writer.write_metadata(result_record::NAME, &result)
+    }
+}
+
+impl RunObserver for Recorder<'_, '_> {
+    fn event(&mut self, event: &ManoeuvreEvent) -> ControlFlow<()> {
+        match self.write_event(event) {
+            Ok(()) => ControlFlow::Continue(()),
+            Err(e) => {
+                self.error = Some(e);
+                ControlFlow::Break(())
+            }
+        }
+    }
+
+    fn sample(&mut self, t: f64, x: &[f64], probe: &RunProbe) -> ControlFlow<()> {
+        if let Err(e) = self.write_sample(t, x, probe) {
+            self.error = Some(e);
             return ControlFlow::Break(());
         }
-        sample += 1;
-        if let Some(p) = opts.progress.as_mut()
-            && last_progress.elapsed().as_secs_f64() > 0.1
+        self.samples += 1;
+        if let Some(p) = self.progress.as_mut()
+            && self.last_progress.elapsed().as_secs_f64() > 0.1
         {
             p(t);
-            last_progress = Instant::now();
+            self.last_progress = Instant::now();
         }
-        if interrupt
+        if self
+            .interrupt
             .as_ref()
             .is_some_and(|i| i.load(Ordering::Relaxed))
         {
             return ControlFlow::Break(());
         }
         ControlFlow::Continue(())
-    });
-    if let Some(e) = write_error {
-        return Err(e);
     }
-    // On a solver error the `.partial` file stays for `gyrolab recover`; nothing appears under
-    // the final name.
-    let stats = result?;
-    let interrupted_at_s = match stats.stop {
-        StopReason::Interrupted { t } => Some(t),
-        StopReason::Finished => None,
+
+    fn finish(&mut self, stats: &RunStats) {
+        if self.error.is_none()
+            && let Err(e) = self.write_end(stats)
+        {
+            self.error = Some(e);
+        }
+    }
+}
+
+/// The metadata records known before the first step, and the attachments.
+fn write_static_metadata(
+    w: &mut RecordingWriter,
+    sim: &Simulation,
+    scene: &Scene,
+    coordinates: &[String],
+    rhs_cost_ns: f64,
+) -> Result<(), RecordingError> {
+    let model = &sim.model;
+    let record = |pairs: &[(&str, String)]| -> BTreeMap<String, String> {
+        pairs
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.clone()))
+            .collect()
     };
-    let end_t = interrupted_at_s.unwrap_or(scene.duration_s);
-    let s = &stats.solver;
-    w.write_record(
-        stats_ch,
-        ns(end_t),
-        &[
-            Value::F64(end_t),
-            Value::U64(s.steps),
-            Value::U64(s.rejected_steps),
-            Value::U64(s.rhs_evals),
-            Value::U64(s.jacobian_evals),
-            Value::F64(s.wall_time_s),
-        ],
+    let overrides: Vec<String> = scene
+        .design_overrides
+        .iter()
+        .map(|(k, v)| format!("{k} = {v}"))
+        .collect();
+    w.write_metadata(
+        scene_record::NAME,
+        &record(&[
+            (scene_record::TOML, scene.source_text.clone()),
+            (scene_record::PATH, scene.source_path.clone()),
+        ]),
+    )?;
+    w.write_metadata(
+        design_record::NAME,
+        &record(&[
+            (design_record::TOML, model.design.source_text.clone()),
+            (design_record::PATH, scene.design_path.clone()),
+            (design_record::OVERRIDES, overrides.join("; ")),
+        ]),
+    )?;
+    w.write_metadata(bodies_record::NAME, &bodies_metadata(model))?;
+    w.write_metadata(design_constants_record::NAME, &design_constants(sim, scene))?;
+    w.write_metadata(
+        run_record::NAME,
+        &run_metadata(sim, scene, coordinates, rhs_cost_ns),
+    )?;
+    w.attach(
+        attachments::SCENE_TOML,
+        attachments::TOML_MEDIA_TYPE,
+        0,
+        scene.source_text.as_bytes(),
+    )?;
+    w.attach(
+        attachments::DESIGN_TOML,
+        attachments::TOML_MEDIA_TYPE,
+        0,
+        model.design.source_text.as_bytes(),
     )
-    .map_err(rec_err)?;
-    let effects = model.effects.names();
-    let status = match interrupted_at_s {
-        Some(t) => format!("interrupted at t = {t} s"),
-        None => "complete".into(),
-    };
-    let result_md: BTreeMap<String, String> = [
-        ("status", status),
-        ("steps", s.steps.to_string()),
-        ("rejected_steps", s.rejected_steps.to_string()),
-        ("rhs_evals", s.rhs_evals.to_string()),
-        ("jacobian_evals", s.jacobian_evals.to_string()),
-        ("wall_time_s", format!("{}", s.wall_time_s)),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect();
-    w.write_metadata("result", &result_md).map_err(rec_err)?;
-    let summary = w.finish().map_err(rec_err)?;
-    Ok(RecordSummary {
-        path: summary.path,
-        bytes: summary.bytes,
-        messages: summary.messages,
-        stats,
-        rhs_cost_ns,
-        effects,
-        interrupted_at_s,
-        wall_time_s: started.elapsed().as_secs_f64(),
-    })
+}
+
+/// The `bodies` record: every body's parent frame and shape, and its rotor's axis and spin.
+fn bodies_metadata(model: &CompiledModel<ShipProgram>) -> BTreeMap<String, String> {
+    let mut m = BTreeMap::new();
+    for (bi, b) in model.design.bodies.iter().enumerate() {
+        let key = |what| bodies_record::key(&b.name, what);
+        m.insert(
+            key(bodies_record::PARENT),
+            parent_frame(model, bi).to_owned(),
+        );
+        m.insert(
+            key(bodies_record::SHAPE),
+            body_shape(&b.shape).metadata_value(),
+        );
+        if let Some(r) = &b.rotor {
+            m.insert(key(bodies_record::SPIN_AXIS), format!("{:?}", r.axis));
+            m.insert(
+                key(bodies_record::SPIN_RAD_PER_S),
+                format!("{}", r.spin_rad_per_s),
+            );
+        }
+    }
+    m
 }
 
 /// Poses are written at every this many output samples (`pose_rate_hz` ≤ `output_rate_hz`).
@@ -511,25 +568,28 @@ fn run_metadata(
 ) -> BTreeMap<String, String> {
     let model = &sim.model;
     [
-        ("program_version", PROGRAM_VERSION.to_string()),
-        ("scene_name", scene.name.clone()),
-        ("design_name", model.design.name.clone()),
-        ("design_kind", model.design.kind.clone()),
-        ("fidelity", model.fidelity.to_string()),
-        ("integrator", scene.method.to_string()),
-        ("rtol", format!("{:e}", scene.tolerances.rtol)),
-        ("atol", format!("{:e}", scene.tolerances.atol)),
-        ("effects", model.effects.names().join(",")),
-        ("coordinates", coords.join(",")),
-        ("output_rate_hz", format!("{}", scene.output_rate_hz)),
-        ("duration_s", format!("{}", scene.duration_s)),
+        (run_record::PROGRAM_VERSION, PROGRAM_VERSION.to_string()),
+        (run_record::SCENE_NAME, scene.name.clone()),
+        (run_record::DESIGN_NAME, model.design.name.clone()),
+        (run_record::DESIGN_KIND, model.design.kind.clone()),
+        (run_record::FIDELITY, model.fidelity.to_string()),
+        (run_record::INTEGRATOR, scene.method.to_string()),
+        (run_record::RTOL, format!("{:e}", scene.tolerances.rtol)),
+        (run_record::ATOL, format!("{:e}", scene.tolerances.atol)),
+        (run_record::EFFECTS, model.effects.names().join(",")),
+        (run_record::COORDINATES, coords.join(",")),
         (
-            "latitude_deg",
+            run_record::OUTPUT_RATE_HZ,
+            format!("{}", scene.output_rate_hz),
+        ),
+        (run_record::DURATION_S, format!("{}", scene.duration_s)),
+        (
+            run_record::LATITUDE_DEG,
             format!("{}", scene.start_latitude_rad.to_degrees()),
         ),
-        ("rhs_cost_ns", format!("{rhs_cost_ns:.1}")),
+        (run_record::RHS_COST_NS, format!("{rhs_cost_ns:.1}")),
         (
-            "pose_every_n_samples",
+            run_record::POSE_EVERY_N_SAMPLES,
             pose_every_n_samples(scene).to_string(),
         ),
     ]
@@ -538,41 +598,22 @@ fn run_metadata(
     .collect()
 }
 
-enum OwnedValue {
-    F64(f64),
-    U64(u64),
-    Str(String),
-}
-impl OwnedValue {
-    fn as_value(&self) -> Value<'_> {
-        match self {
-            OwnedValue::F64(x) => Value::F64(*x),
-            OwnedValue::U64(x) => Value::U64(*x),
-            OwnedValue::Str(s) => Value::Str(s),
-        }
-    }
-}
-
-fn shape_toml(s: &gyro_model::Shape) -> String {
-    use gyro_model::Shape::*;
-    match s {
-        Ring { radius_m, width_m } => {
-            format!("{{ kind = \"ring\", radius_m = {radius_m}, width_m = {width_m} }}")
-        }
-        Disc {
+/// The shape a body is drawn with, in the recording's vocabulary.
+fn body_shape(s: &gyro_model::Shape) -> BodyShape {
+    use gyro_model::Shape;
+    match *s {
+        Shape::Ring { radius_m, width_m } => BodyShape::Ring { radius_m, width_m },
+        Shape::Disc {
             radius_m,
             thickness_m,
-        } => format!("{{ kind = \"disc\", radius_m = {radius_m}, thickness_m = {thickness_m} }}"),
-        Box { size_m } => format!(
-            "{{ kind = \"box\", size_m = [{}, {}, {}] }}",
-            size_m[0], size_m[1], size_m[2]
-        ),
-        Sphere { radius_m } => format!("{{ kind = \"sphere\", radius_m = {radius_m} }}"),
-        Hull { size_m } => format!(
-            "{{ kind = \"hull\", size_m = [{}, {}, {}] }}",
-            size_m[0], size_m[1], size_m[2]
-        ),
-        None => "{ kind = \"none\" }".into(),
+        } => BodyShape::Disc {
+            radius_m,
+            thickness_m,
+        },
+        Shape::Box { size_m } => BodyShape::Box { size_m },
+        Shape::Sphere { radius_m } => BodyShape::Sphere { radius_m },
+        Shape::Hull { size_m } => BodyShape::Hull { size_m },
+        Shape::None => BodyShape::None,
     }
 }
 
@@ -582,9 +623,15 @@ fn design_constants(sim: &Simulation, scene: &Scene) -> BTreeMap<String, String>
     let d = &sim.model.design;
     let mut m = BTreeMap::new();
     for (key, param) in [
-        ("spin_momentum_n_m_s", "spin_momentum_n_m_s"),
-        ("pendulous_moment_n_m", "pendulous_moment_n_m"),
-        ("damper_kappa_n_m", "kappa_n_m"),
+        (
+            design_constants_record::SPIN_MOMENTUM_N_M_S,
+            "spin_momentum_n_m_s",
+        ),
+        (
+            design_constants_record::PENDULOUS_MOMENT_N_M,
+            "pendulous_moment_n_m",
+        ),
+        (design_constants_record::DAMPER_KAPPA_N_M, "kappa_n_m"),
     ] {
         if let Some(v) = d.parameter(param) {
             m.insert(key.to_string(), format!("{v}"));
@@ -603,11 +650,14 @@ fn design_constants(sim: &Simulation, scene: &Scene) -> BTreeMap<String, String>
             latitude_rad: scene.start_latitude_rad,
         };
         m.insert(
-            "undamped_period_s".into(),
+            design_constants_record::UNDAMPED_PERIOD_S.into(),
             format!("{}", th.undamped_period()),
         );
     }
-    m.insert("schuler_period_s".into(), format!("{}", schuler_period_s()));
+    m.insert(
+        design_constants_record::SCHULER_PERIOD_S.into(),
+        format!("{}", schuler_period_s()),
+    );
     // Slowest oscillatory mode of the linearisation.
     let modes = sim.model.modes();
     if let Some(slow) = modes
@@ -616,10 +666,13 @@ fn design_constants(sim: &Simulation, scene: &Scene) -> BTreeMap<String, String>
         .min_by(|a, b| a.1.total_cmp(&b.1))
     {
         m.insert(
-            "mode_period_s".into(),
+            design_constants_record::MODE_PERIOD_S.into(),
             format!("{}", std::f64::consts::TAU / slow.1),
         );
-        m.insert("mode_decay_rate_per_s".into(), format!("{}", -slow.0));
+        m.insert(
+            design_constants_record::MODE_DECAY_RATE_PER_S.into(),
+            format!("{}", -slow.0),
+        );
     }
     m
 }

@@ -2,7 +2,7 @@
 //! output sample to an observer (the recorder, a test, a benchmark). Integrators see only the
 //! `OdeSystem` face of the model; the model holds no integrator state.
 
-use crate::program::ShipProgram;
+use crate::program::{Segment, ShipProgram};
 use crate::scene::Scene;
 use crate::solvers::{self, OdeSystem, OutputGrid, SolveError, SolverStats, StopReason};
 use gyro_model::{CompiledModel, Fidelity, ModelError, ShipMotion};
@@ -108,6 +108,34 @@ impl RunProbe<'_> {
             wall_time_s: self.started.elapsed().as_secs_f64(),
         }
     }
+}
+
+/// A manoeuvre's start or end, as a run reaches it (see [`RunObserver::event`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ManoeuvreEvent<'a> {
+    pub time_s: f64,
+    /// Its start (`true`) or its end.
+    pub is_start: bool,
+    /// Index of the segment in the program, and the segment.
+    pub segment_index: usize,
+    pub segment: &'a Segment,
+    /// Speed and heading at the segment's end (the same in its start and end events).
+    pub speed_after_m_per_s: f64,
+    pub heading_after_rad: f64,
+}
+
+/// What watches a run (the recorder, a test, a benchmark): the program's manoeuvre events as the
+/// run reaches them, every output sample, and how the run ended. Returning
+/// `ControlFlow::Break` stops the run where it is (its stop reason is then `Interrupted`).
+pub trait RunObserver {
+    /// A manoeuvre start or end at or before the sample about to be reported (in program order).
+    fn event(&mut self, _event: &ManoeuvreEvent<'_>) -> ControlFlow<()> {
+        ControlFlow::Continue(())
+    }
+    /// An output sample: time, state, and the solver's work so far.
+    fn sample(&mut self, t: f64, x: &[f64], probe: &RunProbe) -> ControlFlow<()>;
+    /// The run ended (finished or interrupted); not called when the integration fails.
+    fn finish(&mut self, _stats: &RunStats) {}
 }
 
 /// The model as an ODE system that counts what the integrator asks of it.
@@ -219,6 +247,58 @@ impl Simulation {
             stop,
             samples,
         })
+    }
+
+    /// Runs the scene, reporting to `observer`: at every output time first the manoeuvre events
+    /// reached by then, then the sample; at the end, [`RunObserver::finish`].
+    pub fn observe(
+        &self,
+        method: solvers::Method,
+        tol: &solvers::Tolerances,
+        observer: &mut impl RunObserver,
+    ) -> Result<RunStats, RunError> {
+        let events = self.manoeuvre_events();
+        let mut next_event = 0;
+        let stats = self.run_with_progress(method, tol, |t, x, probe| {
+            while let Some(event) = events.get(next_event)
+                && event.time_s <= t + 1e-9
+            {
+                if observer.event(event).is_break() {
+                    return ControlFlow::Break(());
+                }
+                next_event += 1;
+            }
+            observer.sample(t, x, probe)
+        })?;
+        observer.finish(&stats);
+        Ok(stats)
+    }
+
+    /// The start and end of every manoeuvre (steady segments have none) inside the run, in
+    /// program order.
+    pub fn manoeuvre_events(&self) -> Vec<ManoeuvreEvent<'_>> {
+        let mut events = Vec::new();
+        for (i, segment) in self.model.motion.segments.iter().enumerate() {
+            if segment.manoeuvre == gyro_mcap::contract::events::STEADY {
+                continue;
+            }
+            let (_, speed_after_m_per_s, heading_after_rad) = ShipProgram::end_state(segment);
+            let end_s = segment.start_s + segment.duration_s;
+            for (is_start, time_s) in [(true, segment.start_s), (false, end_s)] {
+                if time_s > self.grid.t_end {
+                    continue;
+                }
+                events.push(ManoeuvreEvent {
+                    time_s,
+                    is_start,
+                    segment_index: i,
+                    segment,
+                    speed_after_m_per_s,
+                    heading_after_rad,
+                });
+            }
+        }
+        events
     }
 
     /// `linear` fidelity of an autonomous scene: x(t) = x_eq + exp(A t)(x0 − x_eq), propagated

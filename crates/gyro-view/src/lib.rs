@@ -41,6 +41,7 @@ mod series;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use gyro_mcap::contract::run_record;
 use rerun::blueprint::{
     Blueprint, BlueprintPanel, ContainerLike, Horizontal, SelectionPanel, Spatial3DView,
     TextLogView, TimePanel, TimeSeriesView, Vertical,
@@ -290,16 +291,16 @@ fn log_about(
          reading error in the indicated-North arrow ×{}; poses at most {} Hz / {} per frame.",
         run.name,
         run.path.display(),
-        m("run", "scene_name"),
-        m("run", "design_name"),
-        m("run", "design_kind"),
-        m("run", "fidelity"),
-        m("run", "integrator"),
-        m("run", "rtol"),
-        m("run", "duration_s"),
-        m("run", "output_rate_hz"),
+        m(run_record::NAME, run_record::SCENE_NAME),
+        m(run_record::NAME, run_record::DESIGN_NAME),
+        m(run_record::NAME, run_record::DESIGN_KIND),
+        m(run_record::NAME, run_record::FIDELITY),
+        m(run_record::NAME, run_record::INTEGRATOR),
+        m(run_record::NAME, run_record::RTOL),
+        m(run_record::NAME, run_record::DURATION_S),
+        m(run_record::NAME, run_record::OUTPUT_RATE_HZ),
         run.status(),
-        m("run", "effects"),
+        m(run_record::NAME, run_record::EFFECTS),
         opts.tilt_exaggeration,
         opts.error_exaggeration,
         opts.max_pose_rate_hz,

@@ -4,18 +4,18 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use gyro_mcap::contract::{
+    bodies_record, compass_state, design_record, events as events_channel, result_record,
+    run_record, ship_state, status, tf,
+};
 use gyro_mcap::{Column, Recording};
 use gyro_model::Shape;
 use serde::Deserialize;
 
 use crate::ViewError;
 
-pub(crate) const COMPASS_TOPIC: &str = "/compass/state";
-pub(crate) const SHIP_TOPIC: &str = "/ship/state";
-pub(crate) const EVENTS_TOPIC: &str = "/events";
-pub(crate) const TF_TOPIC: &str = "/tf";
 /// The local level frame at the pivot: the root of every pose tree.
-pub(crate) const EARTH_FRAME: &str = "earth";
+pub(crate) const EARTH_FRAME: &str = tf::EARTH_FRAME;
 
 /// Columns of one record channel (full rate), by field name.
 #[derive(Debug, Default)]
@@ -97,10 +97,14 @@ fn to_i64_ns(t: &[u64]) -> Vec<i64> {
 }
 
 fn events(rec: &Recording) -> Result<Vec<Event>, ViewError> {
-    if !rec.channels().iter().any(|c| c.topic == EVENTS_TOPIC) {
+    if !rec
+        .channels()
+        .iter()
+        .any(|c| c.topic == events_channel::TOPIC)
+    {
         return Ok(Vec::new());
     }
-    let table = rec.read_records(EVENTS_TOPIC)?;
+    let table = rec.read_records(events_channel::TOPIC)?;
     let strings = |name: &str| -> Vec<String> {
         table
             .column(name)
@@ -109,9 +113,9 @@ fn events(rec: &Recording) -> Result<Vec<Event>, ViewError> {
             .unwrap_or_else(|| vec![String::new(); table.len()])
     };
     let (phase, manoeuvre, description) = (
-        strings("phase"),
-        strings("manoeuvre"),
-        strings("description"),
+        strings(events_channel::PHASE),
+        strings(events_channel::MANOEUVRE),
+        strings(events_channel::DESCRIPTION),
     );
     let time_ns = to_i64_ns(&table.log_time_ns);
     Ok((0..table.len())
@@ -125,10 +129,10 @@ fn events(rec: &Recording) -> Result<Vec<Event>, ViewError> {
 }
 
 fn tracks(rec: &Recording) -> Result<Vec<(String, Track)>, ViewError> {
-    if !rec.channels().iter().any(|c| c.topic == TF_TOPIC) {
+    if !rec.channels().iter().any(|c| c.topic == tf::TOPIC) {
         return Ok(Vec::new());
     }
-    let poses = rec.read_poses(TF_TOPIC)?;
+    let poses = rec.read_poses(tf::TOPIC)?;
     let mut index: BTreeMap<&str, usize> = BTreeMap::new();
     let mut out: Vec<(String, Track)> = Vec::new();
     for i in 0..poses.len() {
@@ -212,14 +216,14 @@ fn recorded_rotor(entries: &BTreeMap<String, String>, body: &str) -> Option<([f6
     struct Axis {
         v: [f64; 3],
     }
-    let text = entries.get(&format!("{body}.spin_axis"))?;
+    let text = entries.get(&bodies_record::key(body, bodies_record::SPIN_AXIS))?;
     let [x, y, z] = toml::from_str::<Axis>(&format!("v = {text}")).ok()?.v;
     let n = (x * x + y * y + z * z).sqrt();
     if !(n.is_finite() && n > 1e-12) {
         return None;
     }
     let sign = entries
-        .get(&format!("{body}.spin_rad_per_s"))
+        .get(&bodies_record::key(body, bodies_record::SPIN_RAD_PER_S))
         .and_then(|s| s.trim().parse::<f64>().ok())
         .map_or(1.0, |s| if s < 0.0 { -1.0 } else { 1.0 });
     Some(([x / n, y / n, z / n], sign))
@@ -230,25 +234,26 @@ fn bodies(
     metadata: &BTreeMap<String, BTreeMap<String, String>>,
 ) -> Result<BTreeMap<String, BodyInfo>, ViewError> {
     let rotors = metadata
-        .get("design")
-        .and_then(|d| d.get("toml"))
+        .get(design_record::NAME)
+        .and_then(|d| d.get(design_record::TOML))
         .map(|t| rotors(t))
         .unwrap_or_default();
     let mut out = BTreeMap::new();
-    if let Some(entries) = metadata.get("bodies") {
+    if let Some(entries) = metadata.get(bodies_record::NAME) {
         for (key, value) in entries {
             // The contract names a `shape` and a `parent` per body; accept `<body>.shape`,
             // `<body>/shape` and `shape.<body>` spellings of the key.
+            let shape_key = bodies_record::SHAPE;
             let Some(body) = key
-                .strip_suffix(".shape")
-                .or_else(|| key.strip_suffix("/shape"))
-                .or_else(|| key.strip_prefix("shape."))
+                .strip_suffix(&format!(".{shape_key}"))
+                .or_else(|| key.strip_suffix(&format!("/{shape_key}")))
+                .or_else(|| key.strip_prefix(&format!("{shape_key}.")))
             else {
                 continue;
             };
             let shape = parse_shape(value).map_err(|detail| ViewError::Metadata {
                 path: path.to_path_buf(),
-                key: format!("bodies/{key}"),
+                key: format!("{}/{key}", bodies_record::NAME),
                 detail,
             })?;
             let rotor = recorded_rotor(entries, body)
@@ -288,8 +293,8 @@ impl RunData {
         Ok(RunData {
             path: path.to_path_buf(),
             name,
-            compass: series(&rec, COMPASS_TOPIC)?,
-            ship: series(&rec, SHIP_TOPIC)?,
+            compass: series(&rec, compass_state::TOPIC)?,
+            ship: series(&rec, ship_state::TOPIC)?,
             events: events(&rec)?,
             tracks: tracks(&rec)?,
             bodies: bodies(path, &metadata)?,
@@ -301,11 +306,12 @@ impl RunData {
         self.metadata.get(record)?.get(key).map(String::as_str)
     }
 
-    /// How the run ended, read as `gyro_analysis::Run::status` reads it.
+    /// How the run ended, read as `gyro_analysis::Run::status` reads it: the `result` record,
+    /// else the `run` record (files of earlier builds), else [`status::RECOVERED`].
     pub(crate) fn status(&self) -> &str {
-        self.meta("result", "status")
-            .or_else(|| self.meta("run", "status"))
-            .unwrap_or(gyro_analysis::RECOVERED_STATUS)
+        self.meta(result_record::NAME, result_record::STATUS)
+            .or_else(|| self.meta(run_record::NAME, result_record::STATUS))
+            .unwrap_or(status::RECOVERED)
     }
 }
 
@@ -325,6 +331,57 @@ mod tests {
         assert_eq!(parse_shape(r#"{ kind = "none" }"#), Ok(Shape::None));
         assert!(parse_shape(r#"{ kind = "teapot" }"#).is_err());
         assert!(parse_shape("]]").is_err());
+    }
+
+    #[test]
+    fn every_recorded_shape_parses() {
+        use gyro_mcap::contract::BodyShape;
+        let cases = [
+            (
+                BodyShape::Ring {
+                    radius_m: 0.085,
+                    width_m: 0.012,
+                },
+                Shape::Ring {
+                    radius_m: 0.085,
+                    width_m: 0.012,
+                },
+            ),
+            (
+                BodyShape::Disc {
+                    radius_m: 0.06,
+                    thickness_m: 0.03,
+                },
+                Shape::Disc {
+                    radius_m: 0.06,
+                    thickness_m: 0.03,
+                },
+            ),
+            (
+                BodyShape::Box {
+                    size_m: [1.0, 0.5, 0.25],
+                },
+                Shape::Box {
+                    size_m: [1.0, 0.5, 0.25],
+                },
+            ),
+            (
+                BodyShape::Sphere { radius_m: 0.08 },
+                Shape::Sphere { radius_m: 0.08 },
+            ),
+            (
+                BodyShape::Hull {
+                    size_m: [120.0, 14.5, 8.0],
+                },
+                Shape::Hull {
+                    size_m: [120.0, 14.5, 8.0],
+                },
+            ),
+            (BodyShape::None, Shape::None),
+        ];
+        for (recorded, drawn) in cases {
+            assert_eq!(parse_shape(&recorded.metadata_value()), Ok(drawn));
+        }
     }
 
     #[test]

@@ -4,6 +4,7 @@
 
 use std::collections::BTreeMap;
 
+use gyro_mcap::contract::{compass_state, ship_state, tf};
 use gyro_model::Shape;
 use rerun::{
     Arrows3D, Boxes3D, Color, Cylinders3D, Ellipsoids3D, FillMode, LineStrips3D, Mesh3D,
@@ -452,7 +453,7 @@ pub(crate) fn log_scene(
     }
     // The ship: its own hull if a body gives one, else a schematic outline around the instrument.
     let scale = instrument_scale_m(&run.bodies);
-    if !hull_drawn && let Some(ship) = paths.get("ship") {
+    if !hull_drawn && let Some(ship) = paths.get(tf::SHIP_FRAME) {
         rec.log_static(
             format!("{ship}/hull_outline"),
             &LineStrips3D::new(hull_outline(
@@ -511,7 +512,7 @@ fn log_overlays(
     let exaggeration = TiltExaggeration::new(opts.tilt_exaggeration);
     let tint = RUN_COLORS[run_index % RUN_COLORS.len()];
     let kept = decimate(&run.compass.time_ns, opts);
-    if let Some(err) = run.compass.get("reading_error_rad") {
+    if let Some(err) = run.compass.get(compass_state::READING_ERROR_RAD) {
         let label = if (opts.error_exaggeration - 1.0).abs() < 1e-12 {
             format!("{}: indicated North", run.name)
         } else {
@@ -544,9 +545,9 @@ fn log_overlays(
     }
     let kept = decimate(&run.ship.time_ns, opts);
     if let (Some(gn), Some(gw), Some(gu)) = (
-        run.ship.get("gravity_north_m_per_s2"),
-        run.ship.get("gravity_west_m_per_s2"),
-        run.ship.get("gravity_up_m_per_s2"),
+        run.ship.get(ship_state::GRAVITY_NORTH_M_PER_S2),
+        run.ship.get(ship_state::GRAVITY_WEST_M_PER_S2),
+        run.ship.get(ship_state::GRAVITY_UP_M_PER_S2),
     ) {
         let vectors = kept.iter().map(|&k| {
             let g = |c: &[f64]| c.get(k).copied().unwrap_or(0.0);

@@ -2,6 +2,7 @@
 
 use clap::Args;
 use gyro_analysis::table::{Align, Table};
+use gyro_mcap::contract::{compass_state, design_constants_record, status};
 use gyro_model::Fidelity;
 use gyro_sim::solvers::Method;
 use gyro_sim::{RecordOptions, Scene, SceneOverrides};
@@ -215,7 +216,8 @@ fn print_summary(s: &gyro_sim::RecordSummary, scene: &Scene, json: bool) {
     }
     if let Some(t) = s.interrupted_at_s {
         println!(
-            "interrupted at t = {t:.1} s of {:.1} s; the recording is closed and valid",
+            "{}{t:.1} s of {:.1} s; the recording is closed and valid",
+            status::INTERRUPTED_PREFIX,
             scene.duration_s
         );
     }
@@ -270,14 +272,14 @@ pub fn demo(out: &Path, json: bool) -> Result<ExitCode, CliError> {
         let path = out.join(format!("{name}.mcap"));
         let s = record_scene(&scene, &path, true)?;
         let rec = gyro_mcap::Recording::open(&s.path).map_err(failed)?;
-        let table = rec.read_records("/compass/state").map_err(failed)?;
+        let table = rec.read_records(compass_state::TOPIC).map_err(failed)?;
         let err = table
-            .column("reading_error_rad")
+            .column(compass_state::READING_ERROR_RAD)
             .and_then(|c| c.as_f64())
             .map(|v| v.to_vec())
             .unwrap_or_default();
         let t = table
-            .column("time_s")
+            .column(compass_state::TIME_S)
             .and_then(|c| c.as_f64())
             .map(|v| v.to_vec())
             .unwrap_or_default();
@@ -285,10 +287,13 @@ pub fn demo(out: &Path, json: bool) -> Result<ExitCode, CliError> {
         let max = err.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let dc = rec
             .metadata()
-            .get("design_constants")
+            .get(design_constants_record::NAME)
             .cloned()
             .unwrap_or_default();
-        let period = dc.get("mode_period_s").cloned().unwrap_or_default();
+        let period = dc
+            .get(design_constants_record::MODE_PERIOD_S)
+            .cloned()
+            .unwrap_or_default();
         let tend = t.last().copied().unwrap_or(0.0);
         lines.row([
             name.to_string(),

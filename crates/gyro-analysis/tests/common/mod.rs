@@ -4,79 +4,26 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use gyro_mcap::{FieldSpec, RecordSchema, RecordingWriter, Value, WriterOptions};
+use gyro_mcap::contract::{
+    compass_state, design_constants_record, events, result_record, run_record, ship_state,
+    solver_stats, status,
+};
+use gyro_mcap::{RecordSchema, RecordingWriter, Value, WriterOptions};
 
 pub fn compass_schema() -> RecordSchema {
-    let mut fields = vec![FieldSpec::f64("time_s", "s")];
-    for f in [
-        "reading_error_rad",
-        "compass_heading_rad",
-        "true_heading_rad",
-        "tilt_rad",
-        "zeta_rad",
-        "theta_rad",
-    ] {
-        fields.push(FieldSpec::f64(f, "rad"));
-    }
-    fields.push(FieldSpec::f64("zeta_rate_rad_per_s", "rad/s"));
-    fields.push(FieldSpec::f64("theta_rate_rad_per_s", "rad/s"));
-    RecordSchema {
-        full_name: "gyrolab.CompassState".into(),
-        fields,
-    }
+    compass_state::schema(&["zeta", "theta"])
 }
 
 pub fn ship_schema() -> RecordSchema {
-    let mut fields = vec![FieldSpec::f64("time_s", "s")];
-    for f in [
-        "latitude_rad",
-        "longitude_rad",
-        "heading_rad",
-        "speed_m_per_s",
-        "roll_rad",
-        "pitch_rad",
-        "gravity_north_m_per_s2",
-        "gravity_west_m_per_s2",
-        "gravity_up_m_per_s2",
-    ] {
-        fields.push(FieldSpec::f64(f, ""));
-    }
-    RecordSchema {
-        full_name: "gyrolab.ShipState".into(),
-        fields,
-    }
+    ship_state::schema()
 }
 
 pub fn event_schema() -> RecordSchema {
-    RecordSchema {
-        full_name: "gyrolab.ManoeuvreEvent".into(),
-        fields: vec![
-            FieldSpec::f64("time_s", "s"),
-            FieldSpec::str("phase"),
-            FieldSpec::str("manoeuvre"),
-            FieldSpec::u64("segment"),
-            FieldSpec::str("description"),
-            FieldSpec::f64("speed_before_m_per_s", "m/s"),
-            FieldSpec::f64("speed_after_m_per_s", "m/s"),
-            FieldSpec::f64("heading_before_rad", "rad"),
-            FieldSpec::f64("heading_after_rad", "rad"),
-            FieldSpec::f64("duration_s", "s"),
-        ],
-    }
+    events::schema()
 }
 
 pub fn solver_schema() -> RecordSchema {
-    RecordSchema {
-        full_name: "gyrolab.SolverStats".into(),
-        fields: vec![
-            FieldSpec::f64("time_s", "s"),
-            FieldSpec::u64("steps"),
-            FieldSpec::u64("rejected_steps"),
-            FieldSpec::u64("rhs_evals"),
-            FieldSpec::u64("jacobian_evals"),
-            FieldSpec::f64("wall_time_s", "s"),
-        ],
-    }
+    solver_stats::schema()
 }
 
 /// A manoeuvre event pair: (start, end, segment, speed before/after, heading before/after).
@@ -137,47 +84,61 @@ pub fn temp_dir(name: &str) -> PathBuf {
 pub fn write_run(path: &Path, spec: &Spec) -> PathBuf {
     let mut w = RecordingWriter::create(path, WriterOptions::default()).unwrap();
     let compass = spec.compass.then(|| {
-        w.add_record_channel("/compass/state", &compass_schema())
+        w.add_record_channel(compass_state::TOPIC, &compass_schema())
             .unwrap()
     });
-    let ship = spec
-        .ship
-        .then(|| w.add_record_channel("/ship/state", &ship_schema()).unwrap());
-    let events = w.add_record_channel("/events", &event_schema()).unwrap();
+    let ship = spec.ship.then(|| {
+        w.add_record_channel(ship_state::TOPIC, &ship_schema())
+            .unwrap()
+    });
+    let events = w
+        .add_record_channel(events::TOPIC, &event_schema())
+        .unwrap();
     let solver = w
-        .add_record_channel("/solver/stats", &solver_schema())
+        .add_record_channel(solver_stats::TOPIC, &solver_schema())
         .unwrap();
     let mut run = BTreeMap::new();
     for (k, v) in [
-        ("program_version", "test"),
-        ("scene_name", spec.scene.as_str()),
-        ("design_name", spec.design.as_str()),
-        ("design_kind", "synthetic"),
-        ("fidelity", "full"),
-        ("integrator", "dopri5"),
-        ("rtol", "1e-8"),
-        ("atol", "1e-10"),
-        ("effects", "earth_rotation"),
-        ("status", "complete"),
+        (run_record::PROGRAM_VERSION, "test"),
+        (run_record::SCENE_NAME, spec.scene.as_str()),
+        (run_record::DESIGN_NAME, spec.design.as_str()),
+        (run_record::DESIGN_KIND, "synthetic"),
+        (run_record::FIDELITY, "full"),
+        (run_record::INTEGRATOR, "dopri5"),
+        (run_record::RTOL, "1e-8"),
+        (run_record::ATOL, "1e-10"),
+        (run_record::EFFECTS, "earth_rotation"),
+        // A file of an earlier build: how the run ended is in `run`.
+        (result_record::STATUS, status::COMPLETE),
     ] {
         run.insert(k.to_owned(), v.to_owned());
     }
-    run.insert("latitude_deg".into(), spec.latitude_deg.to_string());
-    run.insert("duration_s".into(), spec.duration_s.to_string());
-    w.write_metadata("run", &run).unwrap();
+    run.insert(
+        run_record::LATITUDE_DEG.into(),
+        spec.latitude_deg.to_string(),
+    );
+    run.insert(run_record::DURATION_S.into(), spec.duration_s.to_string());
+    w.write_metadata(run_record::NAME, &run).unwrap();
     let mut constants = BTreeMap::new();
-    constants.insert("schuler_period_s".to_owned(), "5064.3".to_owned());
+    constants.insert(
+        design_constants_record::SCHULER_PERIOD_S.to_owned(),
+        "5064.3".to_owned(),
+    );
     if let Some(p) = spec.undamped_period_s {
-        constants.insert("undamped_period_s".to_owned(), p.to_string());
+        constants.insert(
+            design_constants_record::UNDAMPED_PERIOD_S.to_owned(),
+            p.to_string(),
+        );
     }
-    w.write_metadata("design_constants", &constants).unwrap();
+    w.write_metadata(design_constants_record::NAME, &constants)
+        .unwrap();
 
     let n = (spec.duration_s * spec.rate_hz).round() as u64;
     let lat = spec.latitude_deg.to_radians();
     let mut pending: Vec<(f64, &str, Manoeuvre)> = spec
         .manoeuvres
         .iter()
-        .flat_map(|m| [(m.start_s, "start", *m), (m.end_s, "end", *m)])
+        .flat_map(|m| [(m.start_s, events::START, *m), (m.end_s, events::END, *m)])
         .collect();
     pending.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut next_event = 0;

@@ -6,11 +6,15 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use gyro_mcap::{FieldSpec, Pose, RecordSchema, RecordingWriter, Value, WriterOptions};
+use gyro_mcap::contract::{
+    BodyShape, bodies_record, compass_state, design_record, events, result_record, run_record,
+    ship_state, status, tf,
+};
+use gyro_mcap::{Pose, RecordingWriter, Value, WriterOptions};
 
 pub const FRAMES: [(&str, &str); 4] = [
-    ("ship", "earth"),
-    ("gimbal", "ship"),
+    (tf::SHIP_FRAME, tf::EARTH_FRAME),
+    ("gimbal", tf::SHIP_FRAME),
     ("float", "gimbal"),
     ("rotor", "float"),
 ];
@@ -44,7 +48,7 @@ fn quat_y(a: f64) -> [f64; 4] {
 /// Pose of each frame at time t: (translation, rotation) in its parent.
 pub fn pose(frame: &str, t: f64) -> ([f64; 3], [f64; 4]) {
     match frame {
-        "ship" => ([0.0, 0.0, -0.5], quat_x(roll(t))),
+        tf::SHIP_FRAME => ([0.0, 0.0, -0.5], quat_x(roll(t))),
         // The gimbal's hinge undoes the roll; the float carries the tilt.
         "gimbal" => ([0.0, 0.0, 0.5], quat_x(-roll(t))),
         "float" => ([0.0, 0.0, 0.0], quat_y(tilt(t))),
@@ -66,60 +70,16 @@ shape = { kind = "disc", radius_m = 0.06, thickness_m = 0.03 }
 /// Writes `n` samples at `rate_hz` to `path`.
 pub fn write_recording(path: &Path, n: usize, rate_hz: f64) {
     let mut w = RecordingWriter::create(path, WriterOptions::default()).expect("create");
-    let compass = RecordSchema {
-        full_name: "gyrolab.CompassState".into(),
-        fields: [
-            "time_s",
-            "reading_error_rad",
-            "compass_heading_rad",
-            "true_heading_rad",
-            "tilt_rad",
-            "theta_rad",
-            "theta_rate_rad_per_s",
-        ]
-        .iter()
-        .map(|f| FieldSpec::f64(f, ""))
-        .collect(),
-    };
-    let ship = RecordSchema {
-        full_name: "gyrolab.ShipState".into(),
-        fields: [
-            "time_s",
-            "latitude_rad",
-            "longitude_rad",
-            "heading_rad",
-            "speed_m_per_s",
-            "roll_rad",
-            "pitch_rad",
-            "gravity_north_m_per_s2",
-            "gravity_west_m_per_s2",
-            "gravity_up_m_per_s2",
-        ]
-        .iter()
-        .map(|f| FieldSpec::f64(f, ""))
-        .collect(),
-    };
-    let events = RecordSchema {
-        full_name: "gyrolab.ManoeuvreEvent".into(),
-        fields: vec![
-            FieldSpec::f64("time_s", "s"),
-            FieldSpec::str("phase"),
-            FieldSpec::str("manoeuvre"),
-            FieldSpec::u64("segment"),
-            FieldSpec::str("description"),
-            FieldSpec::f64("speed_before_m_per_s", "m/s"),
-            FieldSpec::f64("speed_after_m_per_s", "m/s"),
-            FieldSpec::f64("heading_before_rad", "rad"),
-            FieldSpec::f64("heading_after_rad", "rad"),
-            FieldSpec::f64("duration_s", "s"),
-        ],
-    };
     let c = w
-        .add_record_channel("/compass/state", &compass)
+        .add_record_channel(compass_state::TOPIC, &compass_state::schema(&["theta"]))
         .expect("channel");
-    let s = w.add_record_channel("/ship/state", &ship).expect("channel");
-    let e = w.add_record_channel("/events", &events).expect("channel");
-    let tf = w.add_pose_channel("/tf").expect("channel");
+    let s = w
+        .add_record_channel(ship_state::TOPIC, &ship_state::schema())
+        .expect("channel");
+    let e = w
+        .add_record_channel(events::TOPIC, &events::schema())
+        .expect("channel");
+    let tf = w.add_pose_channel(tf::TOPIC).expect("channel");
     let heading = 0.3_f64;
     for i in 0..n {
         let t = i as f64 / rate_hz;
@@ -168,7 +128,7 @@ pub fn write_recording(path: &Path, n: usize, rate_hz: f64) {
             .expect("pose");
         }
     }
-    for (t, phase) in [(300.0, "start"), (320.0, "end")] {
+    for (t, phase) in [(300.0, events::START), (320.0, events::END)] {
         w.write_record(
             e,
             (t * 1e9) as u64,
@@ -194,39 +154,55 @@ pub fn write_recording(path: &Path, n: usize, rate_hz: f64) {
             .collect()
     };
     w.write_metadata(
-        "run",
+        run_record::NAME,
         &meta(&[
-            ("scene_name", "synthetic-speed-change"),
-            ("design_name", "synthetic"),
-            ("design_kind", "gyrocompass"),
-            ("output_rate_hz", &rate_hz.to_string()),
-            ("duration_s", &(n as f64 / rate_hz).to_string()),
-            ("status", "complete"),
-            ("pose_every_n_samples", "1"),
+            (run_record::SCENE_NAME, "synthetic-speed-change"),
+            (run_record::DESIGN_NAME, "synthetic"),
+            (run_record::DESIGN_KIND, "gyrocompass"),
+            (run_record::OUTPUT_RATE_HZ, &rate_hz.to_string()),
+            (run_record::DURATION_S, &(n as f64 / rate_hz).to_string()),
+            (result_record::STATUS, status::COMPLETE),
+            (run_record::POSE_EVERY_N_SAMPLES, "1"),
         ]),
     )
     .expect("meta");
+    let mut bodies = BTreeMap::new();
+    for (body, parent, shape) in [
+        (
+            "gimbal",
+            tf::SHIP_FRAME,
+            BodyShape::Ring {
+                radius_m: 0.12,
+                width_m: 0.015,
+            },
+        ),
+        ("float", "gimbal", BodyShape::Sphere { radius_m: 0.08 }),
+        (
+            "rotor",
+            "float",
+            BodyShape::Disc {
+                radius_m: 0.06,
+                thickness_m: 0.03,
+            },
+        ),
+    ] {
+        bodies.insert(
+            bodies_record::key(body, bodies_record::SHAPE),
+            shape.metadata_value(),
+        );
+        bodies.insert(
+            bodies_record::key(body, bodies_record::PARENT),
+            parent.to_owned(),
+        );
+    }
+    w.write_metadata(bodies_record::NAME, &bodies)
+        .expect("meta");
     w.write_metadata(
-        "bodies",
+        design_record::NAME,
         &meta(&[
-            (
-                "gimbal.shape",
-                r#"{ kind = "ring", radius_m = 0.12, width_m = 0.015 }"#,
-            ),
-            ("gimbal.parent", "ship"),
-            ("float.shape", r#"{ kind = "sphere", radius_m = 0.08 }"#),
-            ("float.parent", "gimbal"),
-            (
-                "rotor.shape",
-                r#"{ kind = "disc", radius_m = 0.06, thickness_m = 0.03 }"#,
-            ),
-            ("rotor.parent", "float"),
+            (design_record::TOML, DESIGN_TOML),
+            (design_record::PATH, "synthetic.toml"),
         ]),
-    )
-    .expect("meta");
-    w.write_metadata(
-        "design",
-        &meta(&[("toml", DESIGN_TOML), ("path", "synthetic.toml")]),
     )
     .expect("meta");
     w.finish().expect("finish");
