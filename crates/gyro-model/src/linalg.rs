@@ -1,7 +1,7 @@
 //! Small dense linear algebra on any [`Real`] (so exact Jacobians flow through the solves),
 //! and the matrix exponential used to propagate `linear` models exactly.
 
-use crate::real::Real;
+use crate::dual::Real;
 
 /// Solves A x = b in place (A row-major n×n, destroyed; b becomes x) by Gaussian elimination
 /// with partial pivoting on the real parts. Returns false if A is singular to working precision.

@@ -14,30 +14,11 @@
 //! the two kinds of numbers meet without a second pass. The Jacobian of the right-hand side
 //! (duals over duals) goes through this walk too.
 
-use super::{Kinetics, cross_const, inertia_mul, re, scale, turn, turn_const};
+use super::walk::{Carried, clear, cross_cg};
+use super::{BodyAxesChain, inertia_mul, re, scale};
 use crate::design::Force;
-use crate::engine::EvalInput;
-use crate::real::{Jet, M3, Real, V3};
-
-/// What is carried down the chain, in the current frame's axes.
-#[derive(Clone, Copy)]
-struct Carried<T: Real, const N: usize> {
-    /// Absolute angular velocity of the frame: base rate plus the chain's rates.
-    w: V3<Jet<T, N>>,
-    /// dω₀/dt at fixed coordinates (only for a moving base).
-    w0_dot: V3<T>,
-    /// Apparent gravity.
-    g: V3<Jet<T, N>>,
-    /// Frame origin relative to the pivot.
-    p: V3<Jet<T, N>>,
-    /// Σ jmᵢ q̇ᵢ: the hinges' lever contribution to the origin's velocity.
-    jm_u: V3<Jet<T, N>>,
-    /// Jacobian columns with their derivative along q̇.
-    jw: [V3<Jet<T, 1>>; N],
-    jm: [V3<Jet<T, 1>>; N],
-    jw_on: u32,
-    jm_on: u32,
-}
+use crate::dual::{Jet, Real, V3};
+use crate::reference_engine::EvalInput;
 
 /// A jet's value with its derivative along `u`.
 #[inline(always)]
@@ -57,7 +38,7 @@ fn valong<T: Real, const N: usize>(x: &V3<Jet<T, N>>, u: &[T]) -> V3<Jet<T, 1>> 
 /// M (first n rows and columns of `m_out`) and r = c + K q̇ (first n of `r_out`) of the
 /// chain's own equations at fidelity `full` (no quadratic energy dropped, `inp.u` = `inp.qd`).
 pub fn evaluate_rates<T: Real, const N: usize>(
-    kin: &Kinetics,
+    kin: &BodyAxesChain,
     inp: &EvalInput<T>,
     spins: &[(usize, T, T)],
     m_out: &mut [[T; N]; N],
@@ -67,38 +48,11 @@ pub fn evaluate_rates<T: Real, const N: usize>(
     debug_assert!(N >= n);
     type J<T, const N: usize> = Jet<T, N>;
     let zero = J::<T, N>::zero();
-    let vz = V3::<J<T, N>>::zero();
-    let vz1 = V3::<Jet<T, 1>>::zero();
-    let q: [J<T, N>; N] = std::array::from_fn(|i| {
-        if i < n {
-            Jet::variable(inp.q[i], i)
-        } else {
-            zero
-        }
-    });
+    let q: [J<T, N>; N] = Jet::variables(inp.q, n);
     let u = &inp.qd[..n];
 
-    let r = inp.world_from_base;
-    let w_base = r.tmul_v(inp.base_rate);
-    let moving = w_base.0.iter().any(|x| x.d[0] != T::zero());
-    let g_world = V3([
-        T::cst(inp.gravity[0]),
-        T::cst(inp.gravity[1]),
-        T::cst(inp.gravity[2]),
-    ]);
-    let g_base = M3(r.0.map(|row| row.map(|x| x.v))).tmul_v(&g_world);
-    let mut st = Carried::<T, N> {
-        w: V3(w_base.0.map(|x| J::<T, N>::constant(x.v))),
-        w0_dot: V3(w_base.0.map(|x| x.d[0])),
-        g: V3(g_base.0.map(J::<T, N>::constant)),
-        p: vz,
-        jm_u: vz,
-        jw: [vz1; N],
-        jm: [vz1; N],
-        jw_on: 0,
-        jm_on: 0,
-    };
-    let mut saved: Vec<(usize, Carried<T, N>)> = Vec::new();
+    let (mut st, moving) = Carried::<T, N, 1>::at_base(inp);
+    let mut saved: Vec<(usize, Carried<T, N, 1>)> = Vec::new();
     if kin.frames[0].save {
         saved.push((0, st));
     }
@@ -108,45 +62,10 @@ pub fn evaluate_rates<T: Real, const N: usize>(
     let mut p = [Jet::<T, 1>::zero(); N];
     let mut pt = [T::zero(); N];
     let mut qf = [T::zero(); N];
-    for row in m_out.iter_mut().take(n) {
-        for x in row.iter_mut().take(n) {
-            *x = T::zero();
-        }
-    }
+    clear(m_out, n);
 
     for (fi, fr) in kin.frames.iter().enumerate().skip(1) {
-        if fr.parent + 1 != fi {
-            st = match saved.iter().rev().find(|(i, _)| *i == fr.parent) {
-                Some((_, s)) => *s,
-                None => unreachable!("the parent frame's state is saved at compile time"),
-            };
-        }
-        if fr.origin_nonzero {
-            for k in 0..3 {
-                st.p.0[k] = st.p.0[k] + fr.origin[k];
-            }
-        }
-        if let Some(jr) = &fr.joint {
-            turn_const(&mut st.w, jr);
-            turn_const(&mut st.g, jr);
-            if !fr.at_pivot {
-                turn_const(&mut st.p, jr);
-            }
-            if st.jm_on != 0 {
-                turn_const(&mut st.jm_u, jr);
-            }
-            if moving {
-                turn_const(&mut st.w0_dot, jr);
-            }
-            for i in 0..n {
-                if st.jw_on & (1 << i) != 0 {
-                    turn_const(&mut st.jw[i], jr);
-                }
-                if st.jm_on & (1 << i) != 0 {
-                    turn_const(&mut st.jm[i], jr);
-                }
-            }
-        }
+        st.to_joint(fi, fr, &saved, n, moving, true);
         // Through the hinge. Most hinges turn by one coordinate (φ = a qⱼ + φ₀): then φ̇, the
         // gradient and the derivatives along q̇ are read off directly.
         let single = match (fr.angle.linear.as_slice(), fr.angle.quadratic.is_empty()) {
@@ -171,30 +90,7 @@ pub fn evaluate_rates<T: Real, const N: usize>(
             ),
             None => (along(s, u), along(c, u)),
         };
-        let (ia, ja) = match fr.axis {
-            0 => (1, 2),
-            1 => (2, 0),
-            _ => (0, 1),
-        };
-        turn(&mut st.w, ia, ja, s, c);
-        turn(&mut st.g, ia, ja, s, c);
-        if !fr.at_pivot {
-            turn(&mut st.p, ia, ja, s, c);
-        }
-        if st.jm_on != 0 {
-            turn(&mut st.jm_u, ia, ja, s, c);
-        }
-        if moving {
-            turn(&mut st.w0_dot, ia, ja, s.v, c.v);
-        }
-        for i in 0..n {
-            if st.jw_on & (1 << i) != 0 {
-                turn(&mut st.jw[i], ia, ja, s1, c1);
-            }
-            if st.jm_on & (1 << i) != 0 {
-                turn(&mut st.jm[i], ia, ja, s1, c1);
-            }
-        }
+        st.through_hinge(fr, n, moving, true, (s, c), (s1, c1));
         // The hinge's own columns, and its rate φ̇ = Σ ∂φ/∂qᵢ q̇ᵢ into ω (and the lever).
         let mut grad = [zero; N];
         let mut phi_dot = zero;
@@ -213,16 +109,7 @@ pub fn evaluate_rates<T: Real, const N: usize>(
             }
         }
         st.w.0[fr.axis] += phi_dot;
-        let axp = if fr.at_pivot {
-            vz
-        } else {
-            let p = &st.p.0;
-            match fr.axis {
-                0 => V3([zero, -p[2], p[1]]),
-                1 => V3([p[2], zero, -p[0]]),
-                _ => V3([-p[1], p[0], zero]),
-            }
-        };
+        let axp = st.hinge_lever(fr);
         if !fr.at_pivot {
             st.jm_u = st.jm_u.add(&axp.scale(phi_dot));
         }
@@ -253,14 +140,7 @@ pub fn evaluate_rates<T: Real, const N: usize>(
         let jwr: [V3<T>; N] = std::array::from_fn(|i| re(&st.jw[i]));
 
         // Forces applied to bodies of this frame (generalised forces from real parts).
-        for e in &fr.forces {
-            let tau = e.torque(inp.q, &re(&st.p));
-            for (i, qi) in qf.iter_mut().enumerate().take(n) {
-                if st.jw_on & (1 << i) != 0 {
-                    *qi += jwr[i].dot(&tau);
-                }
-            }
-        }
+        st.add_body_forces(fr, inp.q, n, &mut qf);
 
         let Some(mp) = &fr.mass else {
             continue;
@@ -269,23 +149,8 @@ pub fn evaluate_rates<T: Real, const N: usize>(
         let (hv, hv_dot) = fr.rotor_momenta(spins, inp.spin_momentum);
         let has_spin = hv.iter().any(|x| *x != T::zero());
         let spin_rate = hv_dot.iter().any(|x| *x != T::zero());
-        let cgp = if fr.at_pivot {
-            V3::from_f64(mp.cg)
-        } else {
-            V3([
-                st.p.0[0] + mp.cg[0],
-                st.p.0[1] + mp.cg[1],
-                st.p.0[2] + mp.cg[2],
-            ])
-        };
-        // x × c
-        let cross_c = |x: &V3<J<T, N>>| -> V3<J<T, N>> {
-            if fr.at_pivot {
-                cross_const(x, &mp.cg)
-            } else {
-                x.cross(&cgp)
-            }
-        };
+        let cgp = st.cg_from_pivot(fr, mp);
+        let cross_c = |x: &V3<J<T, N>>| cross_cg(fr, mp, &cgp, x);
         // Velocity of the centre of gravity, angular momentum, and A with pᵢ = jwᵢ·A − m jmᵢ·v.
         let v = cross_c(&st.w).sub(&st.jm_u);
         let iw = inertia_mul(mp, &st.w);
@@ -301,21 +166,10 @@ pub fn evaluate_rates<T: Real, const N: usize>(
             t_body += scale(st.w.0[0], hv[0]) + scale(st.w.0[1], hv[1]) + scale(st.w.0[2], hv[2]);
         }
         lagrangian += t_body;
-        if fr.at_pivot {
-            lagrangian += (st.g.0[0] * mp.cg[0] + st.g.0[1] * mp.cg[1] + st.g.0[2] * mp.cg[2]) * m;
-        } else {
-            lagrangian += st.g.dot(&cgp) * m;
-        }
+        lagrangian += st.g_dot_cg(fr, mp, &cgp) * m;
         let a1 = valong(&a, u);
         let v1 = valong(&v, u);
-        let wd_terms = if moving {
-            let cre = re(&cgp);
-            let v0d = st.w0_dot.cross(&cre);
-            let a_d = cre.cross(&v0d).scale_f(m).add(&inertia_mul(mp, &st.w0_dot));
-            Some((v0d, a_d))
-        } else {
-            None
-        };
+        let wd_terms = st.moving_base_terms(moving, mp, &cgp);
         for i in 0..n {
             if on & (1 << i) == 0 {
                 continue;
@@ -337,29 +191,9 @@ pub fn evaluate_rates<T: Real, const N: usize>(
                 pt[i] += jwr[i].dot(&V3(hv_dot));
             }
         }
-        // Mass matrix from the real parts of the Jacobians.
-        let cre = re(&cgp);
-        let jvr: [V3<T>; N] = std::array::from_fn(|i| {
-            let x = jwr[i].cross(&cre);
-            if st.jm_on & (1 << i) != 0 {
-                x.sub(&re(&st.jm[i]))
-            } else {
-                x
-            }
-        });
-        // Symmetric: the lower triangle here, mirrored at the end.
-        for j in 0..n {
-            if on & (1 << j) == 0 {
-                continue;
-            }
-            let ijw = inertia_mul(mp, &jwr[j]);
-            for i in j..n {
-                if on & (1 << i) == 0 {
-                    continue;
-                }
-                m_out[i][j] += jvr[i].dot(&jvr[j]) * m + jwr[i].dot(&ijw);
-            }
-        }
+        // Mass matrix from the real parts of the Jacobians. Symmetric: the lower triangle
+        // here, mirrored at the end.
+        st.add_mass_matrix(mp, &cgp, &jwr, n, on, |_| true, true, m_out);
     }
 
     // Coordinate-space force elements.

@@ -22,10 +22,10 @@
 //! driven rows and folding their columns is the caller's step, done after (Beghin ch. I).
 //!
 //! This world-axes form is the reference: the model evaluates the same equations in body axes
-//! (`kinetics`), about 4 times cheaper, and the tests hold the two together to round-off.
+//! (`body_axes`), about 4 times cheaper, and the tests hold the two together to round-off.
 
 use crate::design::{Body, Design, Force, Hinge, Root};
-use crate::real::{Jet, M3, Real, V3};
+use crate::dual::{Jet, M3, Real, V3};
 
 /// The immutable, index-based form of a design's chain that the engine walks.
 #[derive(Clone, Debug)]
@@ -136,13 +136,7 @@ pub fn evaluate<T: Real, const N: usize>(
     debug_assert!(N > n);
     type S<T, const N: usize> = Jet<T, N>;
     let zero = S::<T, N>::zero();
-    let q: [S<T, N>; N] = std::array::from_fn(|i| {
-        if i < n {
-            Jet::variable(inp.q[i], i)
-        } else {
-            zero
-        }
-    });
+    let q: [S<T, N>; N] = Jet::variables(inp.q, n);
     let base_r = M3(inp
         .world_from_base
         .0
@@ -324,8 +318,6 @@ pub fn evaluate<T: Real, const N: usize>(
 /// Calls `evaluate` with a jet width N ≥ n + 1 from a few buckets (unused directions stay zero).
 /// Buckets rather than one instantiation per size keep the compile time of the generic engine
 /// reasonable; the waste is at most a third of the derivative work.
-#[macro_export]
-#[doc(hidden)]
 macro_rules! dispatch_n {
     ($n:expr, $f:ident, $($arg:expr),*) => {
         match $n + 1 {
