@@ -1,6 +1,8 @@
-//! The engine as the model evaluates it: the same Lagrangian and the same equations as
-//! [`crate::reference_engine::evaluate`] (which stays as the plain reference the tests hold this to), but
-//! computed in each body's own axes, where most of the work disappears.
+//! The body-axes engine, as the model evaluates it: the same Lagrangian and the same equations
+//! as the world-axes reference engine ([`crate::reference_engine::evaluate`], which stays as the
+//! plain reference the tests hold this to), but computed in each body's own axes, where most of
+//! the work disappears. Both walks here ([`evaluate`], and [`evaluate_rates`] for the `full`
+//! right-hand side) share their per-frame setup (`walk`).
 //!
 //! Why it is cheaper, with the same mathematics:
 //! - Every energy is a sum of dot products, which do not depend on the axes they are taken in.
@@ -321,11 +323,6 @@ impl BodyAxesChain {
             forces,
         }
     }
-
-    /// Number of frames (hinged bodies) the evaluation walks, the base excluded.
-    pub fn frame_count(&self) -> usize {
-        self.frames.len() - 1
-    }
 }
 
 #[inline(always)]
@@ -390,7 +387,8 @@ fn inertia_mul<S: Real>(mp: &MassProps, x: &V3<S>) -> V3<S> {
     }
 }
 
-/// Forms M, K, c (the same equations as [`crate::reference_engine::evaluate`]) for all coordinates.
+/// Forms M, K, c (the same equations as [`crate::reference_engine::evaluate`]) for all
+/// coordinates.
 /// `N` must be at least `kin.n`; the outputs' first n rows and columns are written, the rest is
 /// left as it was.
 pub fn evaluate<T: Real, const N: usize>(

@@ -3,8 +3,9 @@
 //!
 //! Immutable after [`CompiledModel::compile`] (MuJoCo's model/data split): states are plain
 //! slices the integrator owns. Stages per evaluation: base motion (only the effects compiled in)
-//! → chain kinematics and energies on dual numbers (`reference_engine`) → equations of the non-driven
-//! coordinates with servo relations folded in → solve for accelerations (or precession rates).
+//! → chain kinematics and energies on dual numbers, in body axes (`body_axes`; the world-axes
+//! `reference_engine` is what the tests hold it to) → equations of the non-driven coordinates
+//! with servo relations folded in → solve for accelerations (or precession rates).
 //!
 //! State layout: `full` and `linear`: [q; q̇] over the non-driven coordinates; `gyroscopic`:
 //! [q; q̇ₘ] where the precessional coordinates (those the spin couples gyroscopically) have

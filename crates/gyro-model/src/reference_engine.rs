@@ -1,5 +1,5 @@
-//! The Lagrangian engine: from a kinematic chain to Lagrange's equations, by exact automatic
-//! differentiation.
+//! The reference engine, in world axes: from a kinematic chain to Lagrange's equations, by exact
+//! automatic differentiation.
 //!
 //! For every body, the absolute angular velocity and the velocity of the centre of gravity
 //! (relative to the pivot, in a non-rotating frame that follows it) are linear in the rates:

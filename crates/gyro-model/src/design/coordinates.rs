@@ -63,7 +63,7 @@ pub(super) fn coordinates(
         }
     }
     let mut coordinates = Vec::new();
-    for c in &coordinate {
+    for c in coordinate {
         let anchor = format!("name = \"{}\"", c.name);
         let role = match c.role.as_deref() {
             None => None,

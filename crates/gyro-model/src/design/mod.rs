@@ -17,13 +17,11 @@ mod document;
 mod forces;
 mod reading;
 
-pub use document::apply_override;
-
 use crate::error::{InputError, locate};
 use crate::expr::QuadExpr;
 use bodies::BodyFile;
 use coordinates::CoordinateFile;
-use document::resolve_expressions;
+use document::{apply_override, resolve_expressions};
 use forces::ForceFile;
 use reading::ReadingFile;
 use serde::Deserialize;

@@ -101,68 +101,28 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
                 t_end,
             };
             // Hand-written eq. 44 bis.
-            let ((res, stats), wall) = timed(opts, || {
-                let x0 = [amplitude, 0.0];
-                let mut x = x0;
-                let mut last = x0;
-                let r = solvers::integrate(
-                    &mut Eq44Bis(v),
-                    method,
-                    &tol,
-                    &mut x,
-                    &grid,
-                    &[],
-                    |_, xs| {
-                        last.copy_from_slice(xs);
-                        ControlFlow::Continue(())
-                    },
-                );
-                match r {
-                    Ok((_, s)) => (Some(end_error(&last, &x0)), s),
-                    Err(_) => (None, SolverStats::default()),
-                }
-            });
-            points.push(PeerPoint {
-                implementation: "gyrolab eq44bis".into(),
-                method: method.to_string(),
-                rtol,
-                atol: tol.atol,
-                error: res,
-                wall_s: wall,
-                rhs_evals: stats.rhs_evals,
-            });
+            points.push(end_state_point(
+                opts,
+                "gyrolab eq44bis",
+                || Eq44Bis(v),
+                &[amplitude, 0.0],
+                method,
+                &tol,
+                &grid,
+                &end_error,
+            ));
             // The engine (explicit methods only: RODAS4's AD Jacobian is not the point here).
             if method != Method::Rodas4 {
-                let ((res, stats), wall) = timed(opts, || {
-                    let x0 = sim.model.x0.clone();
-                    let mut x = x0.clone();
-                    let mut last = x0.clone();
-                    let r = solvers::integrate(
-                        &mut ModelSystem { model: &sim.model },
-                        method,
-                        &tol,
-                        &mut x,
-                        &grid,
-                        &[],
-                        |_, xs| {
-                            last.copy_from_slice(xs);
-                            ControlFlow::Continue(())
-                        },
-                    );
-                    match r {
-                        Ok((_, s)) => (Some(end_error(&last, &x0)), s),
-                        Err(_) => (None, SolverStats::default()),
-                    }
-                });
-                points.push(PeerPoint {
-                    implementation: "gyrolab engine".into(),
-                    method: method.to_string(),
-                    rtol,
-                    atol: tol.atol,
-                    error: res,
-                    wall_s: wall,
-                    rhs_evals: stats.rhs_evals,
-                });
+                points.push(end_state_point(
+                    opts,
+                    "gyrolab engine",
+                    || ModelSystem { model: &sim.model },
+                    &sim.model.x0,
+                    method,
+                    &tol,
+                    &grid,
+                    &end_error,
+                ));
             }
             // 4-state Anschütz (explicit methods are stability-bound: loosest tolerance only).
             if method == Method::Rodas4 || rtol == opts.tolerances[0] {
@@ -219,4 +179,40 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
         atol_factor,
         points,
     })
+}
+
+/// One run of `system` from `x0` to the end of `grid` (best wall time of a few), its error
+/// measured on the end state by `end_error(last, x0)`.
+#[allow(clippy::too_many_arguments)]
+fn end_state_point<S: OdeSystem>(
+    opts: &StudyOptions,
+    implementation: &str,
+    system: impl Fn() -> S,
+    x0: &[f64],
+    method: Method,
+    tol: &Tolerances,
+    grid: &OutputGrid,
+    end_error: &dyn Fn(&[f64], &[f64]) -> f64,
+) -> PeerPoint {
+    let ((res, stats), wall) = timed(opts, || {
+        let mut x = x0.to_vec();
+        let mut last = x0.to_vec();
+        let r = solvers::integrate(&mut system(), method, tol, &mut x, grid, &[], |_, xs| {
+            last.copy_from_slice(xs);
+            ControlFlow::Continue(())
+        });
+        match r {
+            Ok((_, s)) => (Some(end_error(&last, x0)), s),
+            Err(_) => (None, SolverStats::default()),
+        }
+    });
+    PeerPoint {
+        implementation: implementation.into(),
+        method: method.to_string(),
+        rtol: tol.rtol,
+        atol: tol.atol,
+        error: res,
+        wall_s: wall,
+        rhs_evals: stats.rhs_evals,
+    }
 }
