@@ -532,13 +532,35 @@ pub fn evaluate<T: Real, const N: usize>(
 
     // Coordinate-space force elements.
     clear(k_out, n);
+    coordinate_forces(kin, inp.q, &q, k_out, &mut v, &mut qf);
+
+    for i in 0..n {
+        c_out[i] = qf[i] - bt[i] + t2.d[i] + t0.d[i] - v.d[i];
+        for k in 0..n {
+            k_out[i][k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
+        }
+    }
+}
+
+/// The coordinate-space force elements: dampers into K (−c ∇e ∇eᵀ), springs into V, and
+/// generalised forces into Q.
+#[inline(always)]
+fn coordinate_forces<T: Real, const N: usize>(
+    kin: &BodyAxesChain,
+    q_real: &[T],
+    q: &[Jet<T, N>; N],
+    k_out: &mut [[T; N]; N],
+    v: &mut Jet<T, N>,
+    qf: &mut [T; N],
+) {
+    let n = kin.n;
     for f in &kin.forces {
         match f {
             Force::Damper {
                 expr, coefficient, ..
             } => {
                 let mut g = [T::zero(); N];
-                expr.add_gradient(inp.q, &mut g[..n]);
+                expr.add_gradient(q_real, &mut g[..n]);
                 for i in 0..n {
                     if g[i] == T::zero() {
                         continue;
@@ -557,21 +579,14 @@ pub fn evaluate<T: Real, const N: usize>(
             } => {
                 let e = expr.eval(&q[..n]);
                 let de = e - *rest;
-                v += de * de * (0.5 * stiffness) + e * *preload;
+                *v += de * de * (0.5 * stiffness) + e * *preload;
             }
             Force::Generalized {
                 coordinate, torque, ..
             } => {
-                qf[*coordinate] += torque.eval(inp.q);
+                qf[*coordinate] += torque.eval(q_real);
             }
             Force::BodyForce { .. } => {}
-        }
-    }
-
-    for i in 0..n {
-        c_out[i] = qf[i] - bt[i] + t2.d[i] + t0.d[i] - v.d[i];
-        for k in 0..n {
-            k_out[i][k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
         }
     }
 }

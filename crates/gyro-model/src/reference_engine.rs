@@ -254,17 +254,39 @@ pub fn evaluate<T: Real, const N: usize>(
     for x in out.k.iter_mut() {
         *x = T::zero();
     }
+    generalised_forces(chain, inp.q, &q, &kin, out.k, &mut v, &mut qf);
+
+    for i in 0..n {
+        out.c[i] = qf[i] - p2[i].d[n] - b[i].d[n] + t2.d[i] + t0.d[i] - v.d[i];
+        for k in 0..n {
+            out.k[i * n + k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
+        }
+    }
+}
+
+/// The force elements: dampers into K, springs into V, body forces (their moments about the
+/// pivot on each body's Jacobian) and generalised forces into Q.
+fn generalised_forces<T: Real, const N: usize>(
+    chain: &Chain,
+    q_real: &[T],
+    q: &[Jet<T, N>; N],
+    kin: &[BodyKin<Jet<T, N>, N>],
+    k_out: &mut [T],
+    v: &mut Jet<T, N>,
+    qf: &mut [T; N],
+) {
+    let n = chain.n;
     for f in &chain.forces {
         match f {
             Force::Damper {
                 expr, coefficient, ..
             } => {
                 let mut g = [T::zero(); N];
-                let qv: [T; N] = std::array::from_fn(|i| if i < n { inp.q[i] } else { T::zero() });
+                let qv: [T; N] = std::array::from_fn(|i| if i < n { q_real[i] } else { T::zero() });
                 expr.add_gradient(&qv[..n], &mut g[..n]);
                 for i in 0..n {
                     for k in 0..n {
-                        out.k[i * n + k] -= g[i] * g[k] * *coefficient;
+                        k_out[i * n + k] -= g[i] * g[k] * *coefficient;
                     }
                 }
             }
@@ -277,7 +299,7 @@ pub fn evaluate<T: Real, const N: usize>(
             } => {
                 let e = expr.eval(&q[..n]);
                 let de = e - *rest;
-                v += de * de * (0.5 * stiffness) + e * *preload;
+                *v += de * de * (0.5 * stiffness) + e * *preload;
             }
             Force::BodyForce {
                 body,
@@ -304,13 +326,6 @@ pub fn evaluate<T: Real, const N: usize>(
             } => {
                 qf[*coordinate] += torque.eval(&q[..n]).v;
             }
-        }
-    }
-
-    for i in 0..n {
-        out.c[i] = qf[i] - p2[i].d[n] - b[i].d[n] + t2.d[i] + t0.d[i] - v.d[i];
-        for k in 0..n {
-            out.k[i * n + k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
         }
     }
 }

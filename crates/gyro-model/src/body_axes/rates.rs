@@ -15,7 +15,7 @@
 //! (duals over duals) goes through this walk too.
 
 use super::walk::{Carried, clear, cross_cg};
-use super::{BodyAxesChain, inertia_mul, re, scale};
+use super::{BodyAxesChain, Frame, inertia_mul, re, scale};
 use crate::design::Force;
 use crate::dual::{Jet, Real, V3};
 use crate::reference_engine::EvalInput;
@@ -66,73 +66,7 @@ pub fn evaluate_rates<T: Real, const N: usize>(
 
     for (fi, fr) in kin.frames.iter().enumerate().skip(1) {
         st.to_joint(fi, fr, &saved, n, moving, true);
-        // Through the hinge. Most hinges turn by one coordinate (φ = a qⱼ + φ₀): then φ̇, the
-        // gradient and the derivatives along q̇ are read off directly.
-        let single = match (fr.angle.linear.as_slice(), fr.angle.quadratic.is_empty()) {
-            ([(j, a)], true) => Some((*j, *a)),
-            _ => None,
-        };
-        let phi = match single {
-            Some((j, a)) => q[j] * a + fr.angle.constant,
-            None => fr.angle.eval(&q[..n]),
-        };
-        let (s, c) = phi.sin_cos();
-        let (s1, c1) = match single {
-            Some((j, _)) => (
-                Jet {
-                    v: s.v,
-                    d: [s.d[j] * u[j]],
-                },
-                Jet {
-                    v: c.v,
-                    d: [c.d[j] * u[j]],
-                },
-            ),
-            None => (along(s, u), along(c, u)),
-        };
-        st.through_hinge(fr, n, moving, true, (s, c), (s1, c1));
-        // The hinge's own columns, and its rate φ̇ = Σ ∂φ/∂qᵢ q̇ᵢ into ω (and the lever).
-        let mut grad = [zero; N];
-        let mut phi_dot = zero;
-        match single {
-            Some((j, a)) => {
-                grad[j] = J::<T, N>::constant(T::cst(a));
-                phi_dot = J::<T, N>::constant(u[j] * a);
-            }
-            None => {
-                fr.angle.add_gradient(&q[..n], &mut grad[..n]);
-                for i in 0..n {
-                    if fr.reads & (1 << i) != 0 {
-                        phi_dot += scale(grad[i], u[i]);
-                    }
-                }
-            }
-        }
-        st.w.0[fr.axis] += phi_dot;
-        let axp = st.hinge_lever(fr);
-        if !fr.at_pivot {
-            st.jm_u = st.jm_u.add(&axp.scale(phi_dot));
-        }
-        let axp1 = valong(&axp, u);
-        for i in 0..n {
-            if fr.reads & (1 << i) == 0 || grad[i] == zero {
-                continue;
-            }
-            let g1 = if single.is_some() {
-                Jet {
-                    v: grad[i].v,
-                    d: [T::zero()],
-                }
-            } else {
-                along(grad[i], u)
-            };
-            st.jw[i].0[fr.axis] += g1;
-            st.jw_on |= 1 << i;
-            if !fr.at_pivot {
-                st.jm[i] = st.jm[i].add(&axp1.scale(g1));
-                st.jm_on |= 1 << i;
-            }
-        }
+        hinge(&mut st, fr, &q, u, n, moving);
         if fr.save {
             saved.push((fi, st));
         }
@@ -198,13 +132,36 @@ pub fn evaluate_rates<T: Real, const N: usize>(
 
     // Coordinate-space force elements.
     let mut damping = [T::zero(); N];
+    coordinate_forces(kin, inp.q, u, &q, &mut damping, &mut lagrangian, &mut qf);
+
+    for i in 0..n {
+        r_out[i] = qf[i] - pt[i] + lagrangian.d[i] - p[i].d[0] + damping[i];
+        for j in i + 1..n {
+            m_out[i][j] = m_out[j][i];
+        }
+    }
+}
+
+/// The coordinate-space force elements: dampers' forces −c ė ∇e at the rates `u` (K is never
+/// formed), springs into L, and generalised forces into Q.
+#[inline(always)]
+fn coordinate_forces<T: Real, const N: usize>(
+    kin: &BodyAxesChain,
+    q_real: &[T],
+    u: &[T],
+    q: &[Jet<T, N>; N],
+    damping: &mut [T; N],
+    lagrangian: &mut Jet<T, N>,
+    qf: &mut [T; N],
+) {
+    let n = kin.n;
     for f in &kin.forces {
         match f {
             Force::Damper {
                 expr, coefficient, ..
             } => {
                 let mut g = [T::zero(); N];
-                expr.add_gradient(inp.q, &mut g[..n]);
+                expr.add_gradient(q_real, &mut g[..n]);
                 let mut rate = T::zero();
                 for i in 0..n {
                     rate += g[i] * u[i];
@@ -225,21 +182,96 @@ pub fn evaluate_rates<T: Real, const N: usize>(
             } => {
                 let e = expr.eval(&q[..n]);
                 let de = e - *rest;
-                lagrangian -= de * de * (0.5 * stiffness) + e * *preload;
+                *lagrangian -= de * de * (0.5 * stiffness) + e * *preload;
             }
             Force::Generalized {
                 coordinate, torque, ..
             } => {
-                qf[*coordinate] += torque.eval(inp.q);
+                qf[*coordinate] += torque.eval(q_real);
             }
             Force::BodyForce { .. } => {}
         }
     }
+}
 
+/// Through frame `fr`'s hinge: the carried state turned by φ, the hinge's rate φ̇ added to ω
+/// (and its lever to Σ jmᵢ q̇ᵢ), and the hinge's own columns with their derivative along q̇.
+#[inline(always)]
+fn hinge<T: Real, const N: usize>(
+    st: &mut Carried<T, N, 1>,
+    fr: &Frame,
+    q: &[Jet<T, N>; N],
+    u: &[T],
+    n: usize,
+    moving: bool,
+) {
+    type J<T, const N: usize> = Jet<T, N>;
+    let zero = J::<T, N>::zero();
+    // Through the hinge. Most hinges turn by one coordinate (φ = a qⱼ + φ₀): then φ̇, the
+    // gradient and the derivatives along q̇ are read off directly.
+    let single = match (fr.angle.linear.as_slice(), fr.angle.quadratic.is_empty()) {
+        ([(j, a)], true) => Some((*j, *a)),
+        _ => None,
+    };
+    let phi = match single {
+        Some((j, a)) => q[j] * a + fr.angle.constant,
+        None => fr.angle.eval(&q[..n]),
+    };
+    let (s, c) = phi.sin_cos();
+    let (s1, c1) = match single {
+        Some((j, _)) => (
+            Jet {
+                v: s.v,
+                d: [s.d[j] * u[j]],
+            },
+            Jet {
+                v: c.v,
+                d: [c.d[j] * u[j]],
+            },
+        ),
+        None => (along(s, u), along(c, u)),
+    };
+    st.through_hinge(fr, n, moving, true, (s, c), (s1, c1));
+    // The hinge's own columns, and its rate φ̇ = Σ ∂φ/∂qᵢ q̇ᵢ into ω (and the lever).
+    let mut grad = [zero; N];
+    let mut phi_dot = zero;
+    match single {
+        Some((j, a)) => {
+            grad[j] = J::<T, N>::constant(T::cst(a));
+            phi_dot = J::<T, N>::constant(u[j] * a);
+        }
+        None => {
+            fr.angle.add_gradient(&q[..n], &mut grad[..n]);
+            for i in 0..n {
+                if fr.reads & (1 << i) != 0 {
+                    phi_dot += scale(grad[i], u[i]);
+                }
+            }
+        }
+    }
+    st.w.0[fr.axis] += phi_dot;
+    let axp = st.hinge_lever(fr);
+    if !fr.at_pivot {
+        st.jm_u = st.jm_u.add(&axp.scale(phi_dot));
+    }
+    let axp1 = valong(&axp, u);
     for i in 0..n {
-        r_out[i] = qf[i] - pt[i] + lagrangian.d[i] - p[i].d[0] + damping[i];
-        for j in i + 1..n {
-            m_out[i][j] = m_out[j][i];
+        if fr.reads & (1 << i) == 0 || grad[i] == zero {
+            continue;
+        }
+        let g1 = if single.is_some() {
+            Jet {
+                v: grad[i].v,
+                d: [T::zero()],
+            }
+        } else {
+            along(grad[i], u)
+        };
+        st.jw[i].0[fr.axis] += g1;
+        st.jw_on |= 1 << i;
+        if !fr.at_pivot {
+            st.jm[i] = st.jm[i].add(&axp1.scale(g1));
+            st.jm_on |= 1 << i;
         }
     }
 }
