@@ -425,7 +425,7 @@ pub fn evaluate<T: Real, const N: usize>(
 
     for (fi, fr) in kin.frames.iter().enumerate().skip(1) {
         // To the hinge point, into the joint's axes, through the hinge.
-        st.to_joint(fi, fr, &saved, n, moving, false);
+        st.enter_joint(fi, fr, &saved, n, moving, false);
         let phi = fr.angle.eval(&q[..n]);
         let (s, c) = phi.sin_cos();
         st.through_hinge(fr, n, moving, false, (s, c), (s, c));

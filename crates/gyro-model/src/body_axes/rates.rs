@@ -65,7 +65,7 @@ pub fn evaluate_rates<T: Real, const N: usize>(
     clear(m_out, n);
 
     for (fi, fr) in kin.frames.iter().enumerate().skip(1) {
-        st.to_joint(fi, fr, &saved, n, moving, true);
+        st.enter_joint(fi, fr, &saved, n, moving, true);
         hinge(&mut st, fr, &q, u, n, moving);
         if fr.save {
             saved.push((fi, st));

@@ -67,7 +67,7 @@ impl<T: Real, const N: usize, const L: usize> Carried<T, N, L> {
     /// not the frame just walked), moved to the hinge point and turned by the joint's constant
     /// rotation. `lever_rate`: carry `jm_u` too.
     #[inline(always)]
-    pub(super) fn to_joint(
+    pub(super) fn enter_joint(
         &mut self,
         fi: usize,
         fr: &Frame,

@@ -174,6 +174,9 @@ pub struct Motor {
     pub initial_spin_rad_per_s: f64,
 }
 
+/// A force element. The variants are the TOML kinds (`damper`, `spring`, `body_force`,
+/// `generalized`).
+#[allow(clippy::enum_variant_names)]
 #[derive(Clone, Debug, PartialEq)]
 pub enum Force {
     Damper {
