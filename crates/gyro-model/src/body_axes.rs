@@ -251,40 +251,7 @@ impl BodyAxesChain {
                     }
                 })
                 .collect();
-            let mass = if props.len() == 1 {
-                let (m, cg, inertia) = props[0];
-                MassProps {
-                    m,
-                    cg,
-                    inertia,
-                    diagonal: false,
-                }
-            } else {
-                let m: f64 = props.iter().map(|p| p.0).sum();
-                let mut cg = [0.0; 3];
-                if m > 0.0 {
-                    for k in 0..3 {
-                        cg[k] = props.iter().map(|p| p.0 * p.1[k]).sum::<f64>() / m;
-                    }
-                }
-                let mut inertia = [[0.0; 3]; 3];
-                for (mk, ck, ik) in &props {
-                    let dv = [ck[0] - cg[0], ck[1] - cg[1], ck[2] - cg[2]];
-                    let d2 = dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2];
-                    for i in 0..3 {
-                        for j in 0..3 {
-                            let delta = if i == j { d2 } else { 0.0 };
-                            inertia[i][j] += ik[i][j] + mk * (delta - dv[i] * dv[j]);
-                        }
-                    }
-                }
-                MassProps {
-                    m,
-                    cg,
-                    inertia,
-                    diagonal: false,
-                }
-            };
+            let mass = merged_mass(&props);
             let mut mass = mass;
             mass.diagonal = (0..3).all(|i| (0..3).all(|j| i == j || mass.inertia[i][j] == 0.0));
             frames[f].mass = Some(mass);
@@ -321,6 +288,46 @@ impl BodyAxesChain {
             n: d.coordinates.len(),
             frames,
             forces,
+        }
+    }
+}
+
+/// The mass properties of rigidly attached bodies, (mass, centre of gravity, inertia about it)
+/// each in the frame's axes, combined: total mass, common centre of gravity, inertia by the
+/// parallel-axis theorem.
+fn merged_mass(props: &[(f64, [f64; 3], Mat)]) -> MassProps {
+    if props.len() == 1 {
+        let (m, cg, inertia) = props[0];
+        MassProps {
+            m,
+            cg,
+            inertia,
+            diagonal: false,
+        }
+    } else {
+        let m: f64 = props.iter().map(|p| p.0).sum();
+        let mut cg = [0.0; 3];
+        if m > 0.0 {
+            for k in 0..3 {
+                cg[k] = props.iter().map(|p| p.0 * p.1[k]).sum::<f64>() / m;
+            }
+        }
+        let mut inertia = [[0.0; 3]; 3];
+        for (mk, ck, ik) in props {
+            let dv = [ck[0] - cg[0], ck[1] - cg[1], ck[2] - cg[2]];
+            let d2 = dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2];
+            for i in 0..3 {
+                for j in 0..3 {
+                    let delta = if i == j { d2 } else { 0.0 };
+                    inertia[i][j] += ik[i][j] + mk * (delta - dv[i] * dv[j]);
+                }
+            }
+        }
+        MassProps {
+            m,
+            cg,
+            inertia,
+            diagonal: false,
         }
     }
 }
