@@ -49,4 +49,4 @@ pub use load::{LoadOptions, Run, load_run, load_runs};
 pub use metrics::{
     AnalysisOptions, MetricsTable, RunAnalysis, RunMetrics, analyze_run, analyze_runs,
 };
-pub use regress::{RegressionReport, Tolerance, Tolerances, regress, update_baseline};
+pub use regress::{MetricTolerance, MetricTolerances, RegressionReport, regress, update_baseline};

@@ -24,21 +24,22 @@ use crate::table::{Align, Table};
 
 /// One metric's tolerance: |current − baseline| ≤ abs + rel·|baseline|.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Tolerance {
+pub struct MetricTolerance {
     #[serde(default)]
     pub abs: f64,
     #[serde(default)]
     pub rel: f64,
 }
 
-impl Tolerance {
+impl MetricTolerance {
     pub fn allowed(&self, baseline: f64) -> f64 {
         self.abs + self.rel * baseline.abs()
     }
 }
 
-/// Tolerances by metric (column name of the metrics table).
-pub type Tolerances = BTreeMap<String, Tolerance>;
+/// Tolerances by metric (column name of the metrics table); the solver's tolerances are
+/// `gyro_sim::solvers::Tolerances`.
+pub type MetricTolerances = BTreeMap<String, MetricTolerance>;
 
 /// Quality columns compared for equality.
 pub const QUALITY_COLUMNS: [&str; 2] = ["azimuth_quality", "tilt_quality"];
@@ -46,7 +47,7 @@ pub const QUALITY_COLUMNS: [&str; 2] = ["azimuth_quality", "tilt_quality"];
 /// The metrics a baseline tracks by default and their tolerances (SI units: s, rad, rad/s).
 /// Solver costs that depend on the machine (wall time) are not tracked; step and evaluation
 /// counts are (deterministic for a given integrator and tolerance), loosely.
-pub fn default_tolerances() -> Tolerances {
+pub fn default_tolerances() -> MetricTolerances {
     let deg = std::f64::consts::PI / 180.0;
     [
         ("period_s", 1.0, 1e-3),
@@ -63,7 +64,7 @@ pub fn default_tolerances() -> Tolerances {
         ("rhs_evals", 0.0, 0.1),
     ]
     .into_iter()
-    .map(|(k, abs, rel)| (k.to_owned(), Tolerance { abs, rel }))
+    .map(|(k, abs, rel)| (k.to_owned(), MetricTolerance { abs, rel }))
     .collect()
 }
 
@@ -71,7 +72,7 @@ pub fn default_tolerances() -> Tolerances {
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct Baseline {
     #[serde(default)]
-    pub tolerances: Tolerances,
+    pub tolerances: MetricTolerances,
     /// Metric values by run key ([`RunMetrics::key`]) and column.
     #[serde(default)]
     pub runs: BTreeMap<String, BTreeMap<String, toml::Value>>,
@@ -87,7 +88,7 @@ impl Baseline {
     }
 
     /// The baseline of a table: its tracked metrics and quality flags, per run key.
-    pub fn of(table: &MetricsTable, tolerances: Tolerances) -> Baseline {
+    pub fn of(table: &MetricsTable, tolerances: MetricTolerances) -> Baseline {
         let mut runs = BTreeMap::new();
         for row in &table.rows {
             let mut values = BTreeMap::new();
@@ -286,7 +287,7 @@ fn value_f64(v: &toml::Value) -> Option<f64> {
 pub fn regress(
     table: &MetricsTable,
     baseline_path: &Path,
-    tolerances: Option<&Tolerances>,
+    tolerances: Option<&MetricTolerances>,
 ) -> Result<RegressionReport> {
     let baseline = Baseline::read(baseline_path)?;
     let mut tol = default_tolerances();
@@ -392,7 +393,7 @@ pub fn regress(
 pub fn update_baseline(
     table: &MetricsTable,
     path: &Path,
-    tolerances: Option<&Tolerances>,
+    tolerances: Option<&MetricTolerances>,
 ) -> Result<Baseline> {
     let tol = match tolerances {
         Some(t) => t.clone(),

@@ -16,7 +16,7 @@
 //! frame, under the weight of its bodies in g_app.
 
 use crate::constants::{EARTH_RADIUS_M, EARTH_RATE_RAD_PER_S, STANDARD_GRAVITY_M_PER_S2};
-use crate::real::{Jet, M3, Real, V3, rot_axis};
+use crate::dual::{Jet, M3, Real, V3, rot_axis};
 
 /// Where the ship is and how it moves at one instant. Generic so the engine can differentiate
 /// it in time exactly.

@@ -8,7 +8,7 @@
 //! `deg(x)` converts degrees to radians; `sqrt`, `sin`, `cos`, `abs` apply to constants; `g`,
 //! `earth_rate` and `earth_radius` are the constants of `constants`.
 
-use crate::real::Real;
+use crate::dual::Real;
 use std::collections::BTreeMap;
 
 /// c + Σ aᵢ qᵢ + Σ bᵢⱼ qᵢ qⱼ over coordinate indices.

@@ -2,9 +2,14 @@
 //!
 //! It owns the Earth and its frames (`earth`), designs as kinematic chains of bodies and hinges
 //! (`design`), the Lagrangian engine that derives equations of motion from kinematics and
-//! energies by exact automatic differentiation (`engine`, `real`), the compiled model that a
+//! energies by exact automatic differentiation on dual numbers (`dual`): once in world axes as
+//! the plain reference (`reference_engine`), and again in each body's own axes as the model
+//! evaluates it (`body_axes`, held to the reference by the tests); the compiled model that a
 //! scene's effects and a fidelity select (`model`), and the closed-form theory of the reference
 //! texts that tests hold the engine to (`theory`).
+//!
+//! Public are the modules other crates read (`constants`, `earth`, `error`, `linalg`, `theory`)
+//! and the items re-exported below; the engine's internals stay inside the crate.
 //!
 //! It knows nothing of files other than the TOML text of a design, nothing of recordings,
 //! integrators or viewers: the simulation crate drives it through [`CompiledModel::rhs`] and
@@ -16,23 +21,23 @@
 // `!(x > 0.0)` on purpose.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
+mod body_axes;
 pub mod constants;
-pub mod design;
+mod design;
+mod dual;
 pub mod earth;
-pub mod engine;
 pub mod error;
-pub mod expr;
-pub mod kinetics;
+mod expr;
 pub mod linalg;
-pub mod model;
-pub mod real;
+mod model;
+mod reference_engine;
 pub mod theory;
 
 pub use design::{CoordinateRole, Design, Root, Shape, SpinMode};
+pub use dual::{Jet, Real};
 pub use earth::{BaseEffects, Moored, ShipKinematics, ShipMotion};
 pub use error::InputError;
 pub use model::{
     BodyPose, CompiledModel, EFFECT_NAMES, Effects, Fidelity, InitialCondition, ModelError,
     ModelOptions, Readout,
 };
-pub use real::{Jet, Real};

@@ -6,7 +6,7 @@
 //! (|λ| from 1.6e-3 to 562 1/s): eigenvalues within 1.2e-12 relative of SciPy's, exp(A h) within
 //! 3e-11 of SciPy's for h up to 3600 s (`cargo test --release -p gyro-model --test linalg_stiff`).
 
-use crate::real::Real;
+use crate::dual::Real;
 
 /// Solves A x = b in place (A row-major n×n, destroyed; b becomes x) by Gaussian elimination
 /// with partial pivoting on the real parts. Returns false if A is singular to working precision.

@@ -3,19 +3,22 @@
 //!
 //! Immutable after [`CompiledModel::compile`] (MuJoCo's model/data split): states are plain
 //! slices the integrator owns. Stages per evaluation: base motion (only the effects compiled in)
-//! → chain kinematics and energies on dual numbers (`engine`) → equations of the non-driven
-//! coordinates with servo relations folded in → solve for accelerations (or precession rates).
+//! → chain kinematics and energies on dual numbers, in body axes (`body_axes`; the world-axes
+//! `reference_engine` is what the tests hold it to) → equations of the non-driven coordinates
+//! with servo relations folded in → solve for accelerations (or precession rates).
 //!
 //! State layout: `full` and `linear`: [q; q̇] over the non-driven coordinates; `gyroscopic`:
 //! [q; q̇ₘ] where the precessional coordinates (those the spin couples gyroscopically) have
 //! first-order equations and only the others keep their rates.
 
+use crate::body_axes::{self, BodyAxesChain};
 use crate::design::{CoordinateRole, Design, Force, Root, SpinMode};
+use crate::dual::{Jet, M3, Real, V3};
 use crate::earth::{BaseEffects, ShipMotion, apparent_gravity, base_motion};
-use crate::engine::{Chain, EvalInput, EvalOutput, MAX_COORDINATES, body_poses, evaluate_any};
-use crate::kinetics::{self, Kinetics};
 use crate::linalg::{self, solve_in_place};
-use crate::real::{Jet, M3, Real, V3};
+use crate::reference_engine::{
+    Chain, EvalInput, EvalOutput, MAX_COORDINATES, body_poses, evaluate_any,
+};
 use std::fmt;
 use std::str::FromStr;
 
@@ -284,7 +287,7 @@ pub struct CompiledModel<M: ShipMotion> {
     inertial_rows: Vec<usize>,
     drop_full: Vec<bool>,
     /// The chain compiled for evaluation in body axes (what `rhs` and `jacobian` use).
-    kinetics: Kinetics,
+    body_axes: BodyAxesChain,
     /// No servo relation: the reduced equations are the chain's own.
     no_servo: bool,
     /// Spin motors compiled in: their spins are the last states of every layout.
@@ -336,7 +339,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         effects.spin_motor = !motors.is_empty();
         let nm = motors.len();
         let chain = Chain::from_design(&design, |f| effects.include_force(f));
-        let kinetics = Kinetics::from_design(&design, |f| effects.include_force(f));
+        let body_axes = BodyAxesChain::from_design(&design, |f| effects.include_force(f));
         let independent: Vec<usize> = (0..n)
             .filter(|&i| design.coordinates[i].servo.is_none())
             .collect();
@@ -393,7 +396,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             precessional_rows: Vec::new(),
             inertial_rows: (0..ni).collect(),
             drop_full: Vec::new(),
-            kinetics,
+            body_axes,
             no_servo: ni == n,
             motors,
             spin_momentum,
@@ -676,7 +679,7 @@ impl<M: ShipMotion> CompiledModel<M> {
     }
 
     /// Forms the reduced equations with the world-axes reference engine
-    /// ([`crate::engine::evaluate`]): M_red (ni×ni), K_red (ni×ni), c_red (ni) at
+    /// ([`crate::reference_engine::evaluate`]): M_red (ni×ni), K_red (ni×ni), c_red (ni) at
     /// (t, q_ind, qd_ind, u_ind).
     #[allow(clippy::too_many_arguments)]
     fn reduced_reference<T: Real>(
@@ -898,7 +901,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                 base_rate: &w,
                 gravity: g,
             };
-            kinetics::evaluate::<T, N>(&self.kinetics, &inp, spins, m_red, k_red, c_red);
+            body_axes::evaluate::<T, N>(&self.body_axes, &inp, spins, m_red, k_red, c_red);
             return;
         }
         let mut q = [T::zero(); N];
@@ -920,7 +923,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         let mut m = [[T::zero(); N]; N];
         let mut k = [[T::zero(); N]; N];
         let mut c = [T::zero(); N];
-        kinetics::evaluate::<T, N>(&self.kinetics, &inp, spins, &mut m, &mut k, &mut c);
+        body_axes::evaluate::<T, N>(&self.body_axes, &inp, spins, &mut m, &mut k, &mut c);
         let s = &self.servo_s;
         for (ri, &i) in self.independent.iter().enumerate() {
             c_red[ri] = c[i];
@@ -941,7 +944,7 @@ impl<M: ShipMotion> CompiledModel<M> {
     }
 
     /// The reduced `full` equations at (t, q_ind, qd_ind): M_red and r_red = c_red + K_red q̇_ind,
-    /// by [`kinetics::evaluate_rates`] (K is never formed). Servo relations as in [`Self::reduced_n`].
+    /// by [`body_axes::evaluate_rates`] (K is never formed). Servo relations as in [`Self::reduced_n`].
     fn reduced_rates_n<T: Real, const N: usize>(
         &self,
         t: T,
@@ -965,7 +968,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                 base_rate: &w,
                 gravity: g,
             };
-            kinetics::evaluate_rates::<T, N>(&self.kinetics, &inp, spins, m_red, r_red);
+            body_axes::evaluate_rates::<T, N>(&self.body_axes, &inp, spins, m_red, r_red);
             return;
         }
         let mut q = [T::zero(); N];
@@ -984,7 +987,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         };
         let mut m = [[T::zero(); N]; N];
         let mut r = [T::zero(); N];
-        kinetics::evaluate_rates::<T, N>(&self.kinetics, &inp, spins, &mut m, &mut r);
+        body_axes::evaluate_rates::<T, N>(&self.body_axes, &inp, spins, &mut m, &mut r);
         // q̇ = S q̇_ind, so K q̇ already is K_red q̇_ind: only M's columns are folded.
         let s = &self.servo_s;
         for (ri, &i) in self.independent.iter().enumerate() {
@@ -1270,7 +1273,8 @@ impl<M: ShipMotion> CompiledModel<M> {
         let (r, w, _) = self.base_at(0.0f64);
         let rr = M3(r.0.map(|row| row.map(|x| x.v)));
         let wv = V3(w.0.map(|x| x.v));
-        let rates = crate::engine::body_angular_velocities(&self.chain, &q, &qd, &rr, &wv);
+        let rates =
+            crate::reference_engine::body_angular_velocities(&self.chain, &q, &qd, &rr, &wv);
         for (bi, b) in self.design.bodies.iter().enumerate() {
             if let Some(rot) = &b.rotor
                 && rot.mode == SpinMode::Free

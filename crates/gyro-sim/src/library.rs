@@ -70,13 +70,13 @@ fn read(
 }
 
 /// Reads a scene by path or shipped name: (label for errors, text, directory for relative refs).
-pub fn read_scene(reference: &str) -> Result<(String, String, Option<PathBuf>), InputError> {
+pub(crate) fn read_scene(reference: &str) -> Result<(String, String, Option<PathBuf>), InputError> {
     read(reference, None, "scenes", SCENES, "scene")
 }
 
 /// Reads a design by path (relative to the scene's folder, or `../designs/NAME.toml` from it, or
 /// `designs/NAME.toml` here) or shipped name.
-pub fn read_design(
+pub(crate) fn read_design(
     reference: &str,
     scene_dir: Option<&Path>,
 ) -> Result<(String, String), InputError> {

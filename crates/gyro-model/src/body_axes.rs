@@ -1,6 +1,8 @@
-//! The engine as the model evaluates it: the same Lagrangian and the same equations as
-//! [`crate::engine::evaluate`] (which stays as the plain reference the tests hold this to), but
-//! computed in each body's own axes, where most of the work disappears.
+//! The body-axes engine, as the model evaluates it: the same Lagrangian and the same equations
+//! as the world-axes reference engine ([`crate::reference_engine::evaluate`], which stays as the
+//! plain reference the tests hold this to), but computed in each body's own axes, where most of
+//! the work disappears. Both walks here ([`evaluate`], and [`evaluate_rates`] for the `full`
+//! right-hand side) share their per-frame setup (`walk`).
 //!
 //! Why it is cheaper, with the same mathematics:
 //! - Every energy is a sum of dot products, which do not depend on the axes they are taken in.
@@ -23,12 +25,14 @@
 //! branching frame in a small vector while its branches are walked.
 
 use crate::design::{Design, Force};
-use crate::engine::EvalInput;
+use crate::dual::{Jet, M3, Real, V3};
 use crate::expr::QuadExpr;
-use crate::real::{Jet, M3, Real, V3};
+use crate::reference_engine::EvalInput;
 
 mod rates;
+mod walk;
 pub use rates::evaluate_rates;
+use walk::{Carried, clear, cross_cg};
 
 /// Mass properties of a frame (its own body and every body rigidly attached to it).
 #[derive(Clone, Debug, PartialEq)]
@@ -120,7 +124,7 @@ impl Frame {
 
 /// A design's chain compiled for evaluation in body axes. Frame 0 is the base.
 #[derive(Clone, Debug)]
-pub struct Kinetics {
+pub struct BodyAxesChain {
     pub n: usize,
     frames: Vec<Frame>,
     /// Dampers, springs and generalised forces (coordinate-space elements).
@@ -156,9 +160,9 @@ fn transpose(a: &Mat) -> Mat {
     r
 }
 
-impl Kinetics {
+impl BodyAxesChain {
     /// Compiles a design's chain; `include_force` selects the force elements (effects).
-    pub fn from_design(d: &Design, include_force: impl Fn(&Force) -> bool) -> Kinetics {
+    pub fn from_design(d: &Design, include_force: impl Fn(&Force) -> bool) -> BodyAxesChain {
         let nb = d.bodies.len();
         // Where each body sits: (frame, origin of the body in frame axes, frame_from_body).
         let mut place: Vec<(usize, [f64; 3], Mat)> = Vec::with_capacity(nb);
@@ -247,40 +251,7 @@ impl Kinetics {
                     }
                 })
                 .collect();
-            let mass = if props.len() == 1 {
-                let (m, cg, inertia) = props[0];
-                MassProps {
-                    m,
-                    cg,
-                    inertia,
-                    diagonal: false,
-                }
-            } else {
-                let m: f64 = props.iter().map(|p| p.0).sum();
-                let mut cg = [0.0; 3];
-                if m > 0.0 {
-                    for k in 0..3 {
-                        cg[k] = props.iter().map(|p| p.0 * p.1[k]).sum::<f64>() / m;
-                    }
-                }
-                let mut inertia = [[0.0; 3]; 3];
-                for (mk, ck, ik) in &props {
-                    let dv = [ck[0] - cg[0], ck[1] - cg[1], ck[2] - cg[2]];
-                    let d2 = dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2];
-                    for i in 0..3 {
-                        for j in 0..3 {
-                            let delta = if i == j { d2 } else { 0.0 };
-                            inertia[i][j] += ik[i][j] + mk * (delta - dv[i] * dv[j]);
-                        }
-                    }
-                }
-                MassProps {
-                    m,
-                    cg,
-                    inertia,
-                    diagonal: false,
-                }
-            };
+            let mass = merged_mass(&props);
             let mut mass = mass;
             mass.diagonal = (0..3).all(|i| (0..3).all(|j| i == j || mass.inertia[i][j] == 0.0));
             frames[f].mass = Some(mass);
@@ -313,36 +284,52 @@ impl Kinetics {
                 frames[p].save = true;
             }
         }
-        Kinetics {
+        BodyAxesChain {
             n: d.coordinates.len(),
             frames,
             forces,
         }
     }
-
-    /// Number of frames (hinged bodies) the evaluation walks, the base excluded.
-    pub fn frame_count(&self) -> usize {
-        self.frames.len() - 1
-    }
 }
 
-/// What is carried down the chain, in the current frame's axes.
-#[derive(Clone, Copy)]
-struct State<T: Real, const N: usize> {
-    /// Base rate ω₀ (absolute rate of the base frame).
-    w0: V3<Jet<T, N>>,
-    /// dω₀/dt at fixed coordinates (only for a moving base).
-    w0_dot: V3<T>,
-    /// Apparent gravity.
-    g: V3<Jet<T, N>>,
-    /// Frame origin relative to the pivot.
-    p: V3<Jet<T, N>>,
-    /// Angular velocity Jacobian columns, and the lever terms Σ (a × p_hinge) ∂φ/∂qᵢ.
-    jw: [V3<Jet<T, N>>; N],
-    jm: [V3<Jet<T, N>>; N],
-    /// Columns of jw (jm) that may be non-zero.
-    jw_on: u32,
-    jm_on: u32,
+/// The mass properties of rigidly attached bodies, (mass, centre of gravity, inertia about it)
+/// each in the frame's axes, combined: total mass, common centre of gravity, inertia by the
+/// parallel-axis theorem.
+fn merged_mass(props: &[(f64, [f64; 3], Mat)]) -> MassProps {
+    if props.len() == 1 {
+        let (m, cg, inertia) = props[0];
+        MassProps {
+            m,
+            cg,
+            inertia,
+            diagonal: false,
+        }
+    } else {
+        let m: f64 = props.iter().map(|p| p.0).sum();
+        let mut cg = [0.0; 3];
+        if m > 0.0 {
+            for k in 0..3 {
+                cg[k] = props.iter().map(|p| p.0 * p.1[k]).sum::<f64>() / m;
+            }
+        }
+        let mut inertia = [[0.0; 3]; 3];
+        for (mk, ck, ik) in props {
+            let dv = [ck[0] - cg[0], ck[1] - cg[1], ck[2] - cg[2]];
+            let d2 = dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2];
+            for i in 0..3 {
+                for j in 0..3 {
+                    let delta = if i == j { d2 } else { 0.0 };
+                    inertia[i][j] += ik[i][j] + mk * (delta - dv[i] * dv[j]);
+                }
+            }
+        }
+        MassProps {
+            m,
+            cg,
+            inertia,
+            diagonal: false,
+        }
+    }
 }
 
 #[inline(always)]
@@ -407,11 +394,12 @@ fn inertia_mul<S: Real>(mp: &MassProps, x: &V3<S>) -> V3<S> {
     }
 }
 
-/// Forms M, K, c (the same equations as [`crate::engine::evaluate`]) for all coordinates.
+/// Forms M, K, c (the same equations as [`crate::reference_engine::evaluate`]) for all
+/// coordinates.
 /// `N` must be at least `kin.n`; the outputs' first n rows and columns are written, the rest is
 /// left as it was.
 pub fn evaluate<T: Real, const N: usize>(
-    kin: &Kinetics,
+    kin: &BodyAxesChain,
     inp: &EvalInput<T>,
     spins: &[(usize, T, T)],
     m_out: &mut [[T; N]; N],
@@ -423,36 +411,12 @@ pub fn evaluate<T: Real, const N: usize>(
     type J<T, const N: usize> = Jet<T, N>;
     let zero = J::<T, N>::zero();
     let vz = V3::<J<T, N>>::zero();
-    let q: [J<T, N>; N] = std::array::from_fn(|i| {
-        if i < n {
-            Jet::variable(inp.q[i], i)
-        } else {
-            zero
-        }
-    });
+    let q: [J<T, N>; N] = Jet::variables(inp.q, n);
     let dropped = |i: usize| inp.drop_quadratic.get(i).copied().unwrap_or(false);
 
     // The base: rate and gravity in its own axes.
-    let r = inp.world_from_base;
-    let w_base = r.tmul_v(inp.base_rate);
-    let moving = w_base.0.iter().any(|x| x.d[0] != T::zero());
-    let g_world = V3([
-        T::cst(inp.gravity[0]),
-        T::cst(inp.gravity[1]),
-        T::cst(inp.gravity[2]),
-    ]);
-    let g_base = M3(r.0.map(|row| row.map(|x| x.v))).tmul_v(&g_world);
-    let mut st = State::<T, N> {
-        w0: V3(w_base.0.map(|x| J::<T, N>::constant(x.v))),
-        w0_dot: V3(w_base.0.map(|x| x.d[0])),
-        g: V3(g_base.0.map(J::<T, N>::constant)),
-        p: vz,
-        jw: [vz; N],
-        jm: [vz; N],
-        jw_on: 0,
-        jm_on: 0,
-    };
-    let mut saved: Vec<(usize, State<T, N>)> = Vec::new();
+    let (mut st, moving) = Carried::<T, N, N>::at_base(inp);
+    let mut saved: Vec<(usize, Carried<T, N, N>)> = Vec::new();
     if kin.frames[0].save {
         saved.push((0, st));
     }
@@ -464,81 +428,18 @@ pub fn evaluate<T: Real, const N: usize>(
     let mut t0 = zero;
     let mut v = zero;
     let mut qf = [T::zero(); N];
-    for row in m_out.iter_mut().take(n) {
-        for x in row.iter_mut().take(n) {
-            *x = T::zero();
-        }
-    }
+    clear(m_out, n);
 
     for (fi, fr) in kin.frames.iter().enumerate().skip(1) {
-        if fr.parent + 1 != fi {
-            st = match saved.iter().rev().find(|(i, _)| *i == fr.parent) {
-                Some((_, s)) => *s,
-                None => unreachable!("the parent frame's state is saved at compile time"),
-            };
-        }
-        // To the hinge point, into the joint's axes.
-        if fr.origin_nonzero {
-            for k in 0..3 {
-                st.p.0[k] = st.p.0[k] + fr.origin[k];
-            }
-        }
-        if let Some(jr) = &fr.joint {
-            turn_const(&mut st.w0, jr);
-            turn_const(&mut st.g, jr);
-            if !fr.at_pivot {
-                turn_const(&mut st.p, jr);
-            }
-            if moving {
-                turn_const(&mut st.w0_dot, jr);
-            }
-            for i in 0..n {
-                if st.jw_on & (1 << i) != 0 {
-                    turn_const(&mut st.jw[i], jr);
-                }
-                if st.jm_on & (1 << i) != 0 {
-                    turn_const(&mut st.jm[i], jr);
-                }
-            }
-        }
-        // Through the hinge.
+        // To the hinge point, into the joint's axes, through the hinge.
+        st.enter_joint(fi, fr, &saved, n, moving, false);
         let phi = fr.angle.eval(&q[..n]);
         let (s, c) = phi.sin_cos();
-        let (ia, ja) = match fr.axis {
-            0 => (1, 2),
-            1 => (2, 0),
-            _ => (0, 1),
-        };
-        turn(&mut st.w0, ia, ja, s, c);
-        turn(&mut st.g, ia, ja, s, c);
-        if !fr.at_pivot {
-            turn(&mut st.p, ia, ja, s, c);
-        }
-        if moving {
-            turn(&mut st.w0_dot, ia, ja, s.v, c.v);
-        }
-        for i in 0..n {
-            if st.jw_on & (1 << i) != 0 {
-                turn(&mut st.jw[i], ia, ja, s, c);
-            }
-            if st.jm_on & (1 << i) != 0 {
-                turn(&mut st.jm[i], ia, ja, s, c);
-            }
-        }
+        st.through_hinge(fr, n, moving, false, (s, c), (s, c));
         // The hinge's own columns: its axis (and lever) times ∂φ/∂qᵢ.
         let mut grad = [zero; N];
         fr.angle.add_gradient(&q[..n], &mut grad[..n]);
-        let axp = if fr.at_pivot {
-            vz
-        } else {
-            // e_axis × p
-            let p = &st.p.0;
-            match fr.axis {
-                0 => V3([zero, -p[2], p[1]]),
-                1 => V3([p[2], zero, -p[0]]),
-                _ => V3([-p[1], p[0], zero]),
-            }
-        };
+        let axp = st.hinge_lever(fr);
         for i in 0..n {
             if fr.reads & (1 << i) == 0 || grad[i] == zero {
                 continue;
@@ -556,14 +457,7 @@ pub fn evaluate<T: Real, const N: usize>(
         let on = st.jw_on | st.jm_on;
 
         // Forces applied to bodies of this frame (generalised forces from real parts).
-        for e in &fr.forces {
-            let tau = e.torque(inp.q, &re(&st.p));
-            for (i, qi) in qf.iter_mut().enumerate().take(n) {
-                if st.jw_on & (1 << i) != 0 {
-                    *qi += re(&st.jw[i]).dot(&tau);
-                }
-            }
-        }
+        st.add_body_forces(fr, inp.q, n, &mut qf);
 
         // Energies of the bodies in this frame.
         let Some(mp) = &fr.mass else {
@@ -575,25 +469,8 @@ pub fn evaluate<T: Real, const N: usize>(
         let (hv, hv_dot) = fr.rotor_momenta(spins, inp.spin_momentum);
         let has_spin = hv.iter().any(|x| *x != T::zero());
         let spin_rate = hv_dot.iter().any(|x| *x != T::zero());
-        // The centre of gravity from the pivot: a constant in frame axes when the frame turns
-        // about the pivot (then every product with it is a product with plain numbers).
-        let cgp = if fr.at_pivot {
-            V3::from_f64(mp.cg)
-        } else {
-            V3([
-                st.p.0[0] + mp.cg[0],
-                st.p.0[1] + mp.cg[1],
-                st.p.0[2] + mp.cg[2],
-            ])
-        };
-        // x × c
-        let cross_c = |x: &V3<J<T, N>>| -> V3<J<T, N>> {
-            if fr.at_pivot {
-                cross_const(x, &mp.cg)
-            } else {
-                x.cross(&cgp)
-            }
-        };
+        let cgp = st.cg_from_pivot(fr, mp);
+        let cross_c = |x: &V3<J<T, N>>| cross_cg(fr, mp, &cgp, x);
         // The velocity Jacobian of the centre of gravity is jvᵢ = jwᵢ × c − jmᵢ, and every
         // product with it is taken as jvᵢ·X = jwᵢ·(c × X) − jmᵢ·X: no jvᵢ is ever formed.
         let mut w_u = vz;
@@ -607,9 +484,9 @@ pub fn evaluate<T: Real, const N: usize>(
             }
         }
         let v_u = cross_c(&w_u).sub(&jm_u);
-        let v0 = cross_c(&st.w0);
+        let v0 = cross_c(&st.w);
         let h_u = inertia_mul(mp, &w_u);
-        let iw0 = inertia_mul(mp, &st.w0);
+        let iw0 = inertia_mul(mp, &st.w);
         let mut h0 = iw0;
         if has_spin {
             for k in 0..3 {
@@ -619,14 +496,7 @@ pub fn evaluate<T: Real, const N: usize>(
         // c × X = −(X × c)
         let a_u = cross_c(&v_u).scale_f(-m).add(&h_u);
         let a_0 = cross_c(&v0).scale_f(-m).add(&h0);
-        let wd_terms = if moving {
-            let cre = re(&cgp);
-            let v0d = st.w0_dot.cross(&cre);
-            let a_d = cre.cross(&v0d).scale_f(m).add(&inertia_mul(mp, &st.w0_dot));
-            Some((v0d, a_d))
-        } else {
-            None
-        };
+        let wd_terms = st.moving_base_terms(moving, mp, &cgp);
         for i in 0..n {
             if on & (1 << i) == 0 {
                 continue;
@@ -656,55 +526,48 @@ pub fn evaluate<T: Real, const N: usize>(
             }
         }
         t2 += (v_u.dot(&v_u) * m + w_u.dot(&h_u)) * 0.5;
-        let mut t0_body = (v0.dot(&v0) * m + st.w0.dot(&iw0)) * 0.5;
+        let mut t0_body = (v0.dot(&v0) * m + st.w.dot(&iw0)) * 0.5;
         if has_spin {
-            t0_body +=
-                scale(st.w0.0[0], hv[0]) + scale(st.w0.0[1], hv[1]) + scale(st.w0.0[2], hv[2]);
+            t0_body += scale(st.w.0[0], hv[0]) + scale(st.w.0[1], hv[1]) + scale(st.w.0[2], hv[2]);
         }
         t0 += t0_body;
-        if fr.at_pivot {
-            v -= (st.g.0[0] * mp.cg[0] + st.g.0[1] * mp.cg[1] + st.g.0[2] * mp.cg[2]) * m;
-        } else {
-            v -= st.g.dot(&cgp) * m;
-        }
+        v -= st.g_dot_cg(fr, mp, &cgp) * m;
         // Mass matrix from the real parts of the Jacobians.
-        let cre = re(&cgp);
         let jwr: [V3<T>; N] = std::array::from_fn(|i| re(&st.jw[i]));
-        let jvr: [V3<T>; N] = std::array::from_fn(|i| {
-            let x = jwr[i].cross(&cre);
-            if st.jm_on & (1 << i) != 0 {
-                x.sub(&re(&st.jm[i]))
-            } else {
-                x
-            }
-        });
-        for j in 0..n {
-            if on & (1 << j) == 0 || dropped(j) {
-                continue;
-            }
-            let ijw = inertia_mul(mp, &jwr[j]);
-            for i in 0..n {
-                if on & (1 << i) == 0 || dropped(i) {
-                    continue;
-                }
-                m_out[i][j] += jvr[i].dot(&jvr[j]) * m + jwr[i].dot(&ijw);
-            }
-        }
+        st.add_mass_matrix(mp, &cgp, &jwr, n, on, |i| !dropped(i), false, m_out);
     }
 
     // Coordinate-space force elements.
-    for row in k_out.iter_mut().take(n) {
-        for x in row.iter_mut().take(n) {
-            *x = T::zero();
+    clear(k_out, n);
+    coordinate_forces(kin, inp.q, &q, k_out, &mut v, &mut qf);
+
+    for i in 0..n {
+        c_out[i] = qf[i] - bt[i] + t2.d[i] + t0.d[i] - v.d[i];
+        for k in 0..n {
+            k_out[i][k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
         }
     }
+}
+
+/// The coordinate-space force elements: dampers into K (−c ∇e ∇eᵀ), springs into V, and
+/// generalised forces into Q.
+#[inline(always)]
+fn coordinate_forces<T: Real, const N: usize>(
+    kin: &BodyAxesChain,
+    q_real: &[T],
+    q: &[Jet<T, N>; N],
+    k_out: &mut [[T; N]; N],
+    v: &mut Jet<T, N>,
+    qf: &mut [T; N],
+) {
+    let n = kin.n;
     for f in &kin.forces {
         match f {
             Force::Damper {
                 expr, coefficient, ..
             } => {
                 let mut g = [T::zero(); N];
-                expr.add_gradient(inp.q, &mut g[..n]);
+                expr.add_gradient(q_real, &mut g[..n]);
                 for i in 0..n {
                     if g[i] == T::zero() {
                         continue;
@@ -723,21 +586,14 @@ pub fn evaluate<T: Real, const N: usize>(
             } => {
                 let e = expr.eval(&q[..n]);
                 let de = e - *rest;
-                v += de * de * (0.5 * stiffness) + e * *preload;
+                *v += de * de * (0.5 * stiffness) + e * *preload;
             }
             Force::Generalized {
                 coordinate, torque, ..
             } => {
-                qf[*coordinate] += torque.eval(inp.q);
+                qf[*coordinate] += torque.eval(q_real);
             }
             Force::BodyForce { .. } => {}
-        }
-    }
-
-    for i in 0..n {
-        c_out[i] = qf[i] - bt[i] + t2.d[i] + t0.d[i] - v.d[i];
-        for k in 0..n {
-            k_out[i][k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
         }
     }
 }

@@ -107,6 +107,18 @@ impl<T: Real, const N: usize> Jet<T, N> {
         d[i] = T::one();
         Jet { v, d }
     }
+    /// The first `n` of `q` as variables (coordinate i along direction i), zero beyond: the
+    /// coordinates every chain walk differentiates along.
+    #[inline(always)]
+    pub fn variables(q: &[T], n: usize) -> [Self; N] {
+        std::array::from_fn(|i| {
+            if i < n {
+                Jet::variable(q[i], i)
+            } else {
+                Jet::zero()
+            }
+        })
+    }
     /// Chain rule for a scalar function with value `f` and derivative `df` at `self.v`.
     #[inline(always)]
     fn chain(self, f: T, df: T) -> Self {

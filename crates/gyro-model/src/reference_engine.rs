@@ -1,5 +1,5 @@
-//! The Lagrangian engine: from a kinematic chain to Lagrange's equations, by exact automatic
-//! differentiation.
+//! The reference engine, in world axes: from a kinematic chain to Lagrange's equations, by exact
+//! automatic differentiation.
 //!
 //! For every body, the absolute angular velocity and the velocity of the centre of gravity
 //! (relative to the pivot, in a non-rotating frame that follows it) are linear in the rates:
@@ -22,10 +22,10 @@
 //! driven rows and folding their columns is the caller's step, done after (Beghin ch. I).
 //!
 //! This world-axes form is the reference: the model evaluates the same equations in body axes
-//! (`kinetics`), about 4 times cheaper, and the tests hold the two together to round-off.
+//! (`body_axes`), about 4 times cheaper, and the tests hold the two together to round-off.
 
 use crate::design::{Body, Design, Force, Hinge, Root};
-use crate::real::{Jet, M3, Real, V3};
+use crate::dual::{Jet, M3, Real, V3};
 
 /// The immutable, index-based form of a design's chain that the engine walks.
 #[derive(Clone, Debug)]
@@ -136,13 +136,7 @@ pub fn evaluate<T: Real, const N: usize>(
     debug_assert!(N > n);
     type S<T, const N: usize> = Jet<T, N>;
     let zero = S::<T, N>::zero();
-    let q: [S<T, N>; N] = std::array::from_fn(|i| {
-        if i < n {
-            Jet::variable(inp.q[i], i)
-        } else {
-            zero
-        }
-    });
+    let q: [S<T, N>; N] = Jet::variables(inp.q, n);
     let base_r = M3(inp
         .world_from_base
         .0
@@ -260,17 +254,39 @@ pub fn evaluate<T: Real, const N: usize>(
     for x in out.k.iter_mut() {
         *x = T::zero();
     }
+    generalised_forces(chain, inp.q, &q, &kin, out.k, &mut v, &mut qf);
+
+    for i in 0..n {
+        out.c[i] = qf[i] - p2[i].d[n] - b[i].d[n] + t2.d[i] + t0.d[i] - v.d[i];
+        for k in 0..n {
+            out.k[i * n + k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
+        }
+    }
+}
+
+/// The force elements: dampers into K, springs into V, body forces (their moments about the
+/// pivot on each body's Jacobian) and generalised forces into Q.
+fn generalised_forces<T: Real, const N: usize>(
+    chain: &Chain,
+    q_real: &[T],
+    q: &[Jet<T, N>; N],
+    kin: &[BodyKin<Jet<T, N>, N>],
+    k_out: &mut [T],
+    v: &mut Jet<T, N>,
+    qf: &mut [T; N],
+) {
+    let n = chain.n;
     for f in &chain.forces {
         match f {
             Force::Damper {
                 expr, coefficient, ..
             } => {
                 let mut g = [T::zero(); N];
-                let qv: [T; N] = std::array::from_fn(|i| if i < n { inp.q[i] } else { T::zero() });
+                let qv: [T; N] = std::array::from_fn(|i| if i < n { q_real[i] } else { T::zero() });
                 expr.add_gradient(&qv[..n], &mut g[..n]);
                 for i in 0..n {
                     for k in 0..n {
-                        out.k[i * n + k] -= g[i] * g[k] * *coefficient;
+                        k_out[i * n + k] -= g[i] * g[k] * *coefficient;
                     }
                 }
             }
@@ -283,7 +299,7 @@ pub fn evaluate<T: Real, const N: usize>(
             } => {
                 let e = expr.eval(&q[..n]);
                 let de = e - *rest;
-                v += de * de * (0.5 * stiffness) + e * *preload;
+                *v += de * de * (0.5 * stiffness) + e * *preload;
             }
             Force::BodyForce {
                 body,
@@ -312,20 +328,11 @@ pub fn evaluate<T: Real, const N: usize>(
             }
         }
     }
-
-    for i in 0..n {
-        out.c[i] = qf[i] - p2[i].d[n] - b[i].d[n] + t2.d[i] + t0.d[i] - v.d[i];
-        for k in 0..n {
-            out.k[i * n + k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
-        }
-    }
 }
 
 /// Calls `evaluate` with a jet width N ≥ n + 1 from a few buckets (unused directions stay zero).
 /// Buckets rather than one instantiation per size keep the compile time of the generic engine
 /// reasonable; the waste is at most a third of the derivative work.
-#[macro_export]
-#[doc(hidden)]
 macro_rules! dispatch_n {
     ($n:expr, $f:ident, $($arg:expr),*) => {
         match $n + 1 {

@@ -1,0 +1,218 @@
+//! The Python peer's cases (analysis/bench/peer.py runs the same equations with SciPy).
+
+use super::StudyError;
+use super::StudyOptions;
+use super::measurement::{Budget, timed};
+use super::problems::{Anschutz4, LinearSystem, exact_linear, foucault_release};
+use crate::run::ModelSystem;
+use crate::solvers::{self, Method, OdeSystem, OutputGrid, SolverStats, Tolerances};
+use gyro_model::theory::Villarceau;
+use serde::Serialize;
+use std::ops::ControlFlow;
+
+/// Villarceau's eq. 44 bis written by hand: γ″ = (g/a)(−sin γ + 2δ sin γ cos γ), state (γ, γ′).
+#[derive(Clone, Copy, Debug)]
+struct Eq44Bis(Villarceau);
+
+impl OdeSystem for Eq44Bis {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) {
+        dx[0] = x[1];
+        dx[1] = self.0.acceleration(x[0]);
+    }
+    fn jacobian(&mut self, _t: f64, x: &[f64], jac: &mut [f64]) -> bool {
+        let (s, c) = x[0].sin_cos();
+        jac.copy_from_slice(&[
+            0.0,
+            1.0,
+            self.0.g_over_a * (-c + 2.0 * self.0.delta * (c * c - s * s)),
+            0.0,
+        ]);
+        true
+    }
+}
+
+/// One peer measurement.
+#[derive(Clone, Debug, Serialize)]
+pub struct PeerPoint {
+    /// `gyrolab eq44bis` (hand-written), `gyrolab engine` (the Lagrangian engine's model),
+    /// `gyrolab 4state`.
+    pub implementation: String,
+    pub method: String,
+    pub rtol: f64,
+    pub atol: f64,
+    pub error: Option<f64>,
+    pub wall_s: f64,
+    pub rhs_evals: u64,
+}
+
+/// The peer cases and gyrolab's side of them.
+#[derive(Clone, Debug, Serialize)]
+pub struct PeerReport {
+    /// Villarceau eq. 44 bis: g/a, δ, release γ₀ (rad, from the centre), exact period, periods.
+    pub villarceau: serde_json::Value,
+    pub anschutz4: Anschutz4,
+    /// atol = rtol × this, on both sides.
+    pub atol_factor: f64,
+    pub points: Vec<PeerPoint>,
+}
+
+/// Villarceau's peer case: the large-amplitude azimuth gyroscope, 100 exact periods.
+const PEER_PERIODS: f64 = 100.0;
+
+/// Runs gyrolab's side of the peer benchmark: for each tolerance, Villarceau over 100 periods
+/// (hand-written eq. 44 bis and the engine) and the 4-state Anschütz, with DOP853, DOPRI5 and
+/// RODAS4. Errors are measured exactly as `analysis/bench/peer.py` measures SciPy's.
+pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
+    let setup = |message: String| StudyError::Setup {
+        case: "peer".into(),
+        message,
+    };
+    let amplitude = 90f64.to_radians();
+    let (sim, v, _) = foucault_release(90.0, amplitude).map_err(setup)?;
+    let period = v.period(amplitude);
+    let t_end = PEER_PERIODS * period;
+    let w0 = v.g_over_a.abs().sqrt();
+    let atol_factor = 1e-3;
+    let a4 = Anschutz4::from_design().map_err(setup)?;
+    let a4m = a4.matrix();
+    let grid4 = OutputGrid {
+        t0: 0.0,
+        dt: a4.dt,
+        t_end: a4.t_end,
+    };
+    let exact4 = exact_linear(&a4m, 4, &a4.x0, &grid4);
+    let mut points = Vec::new();
+    for &rtol in &opts.tolerances {
+        let tol = Tolerances {
+            rtol,
+            atol: rtol * atol_factor,
+            ..Default::default()
+        };
+        for method in [Method::Dop853, Method::Dopri5, Method::Rodas4] {
+            let end_error = |last: &[f64], x0: &[f64]| {
+                (last[0] - x0[0]).hypot((last[1] - x0[1]) / w0) / amplitude
+            };
+            let grid = OutputGrid {
+                t0: 0.0,
+                dt: t_end,
+                t_end,
+            };
+            // Hand-written eq. 44 bis.
+            points.push(end_state_point(
+                opts,
+                "gyrolab eq44bis",
+                || Eq44Bis(v),
+                &[amplitude, 0.0],
+                method,
+                &tol,
+                &grid,
+                &end_error,
+            ));
+            // The engine (explicit methods only: RODAS4's AD Jacobian is not the point here).
+            if method != Method::Rodas4 {
+                points.push(end_state_point(
+                    opts,
+                    "gyrolab engine",
+                    || ModelSystem { model: &sim.model },
+                    &sim.model.x0,
+                    method,
+                    &tol,
+                    &grid,
+                    &end_error,
+                ));
+            }
+            // 4-state Anschütz (explicit methods are stability-bound: loosest tolerance only).
+            if method == Method::Rodas4 || rtol == opts.tolerances[0] {
+                let tol4 = Tolerances {
+                    atol: rtol * 1e-4,
+                    ..tol
+                };
+                let ((res, stats), wall) = timed(opts, || {
+                    let mut x = a4.x0.to_vec();
+                    let mut k = 0;
+                    let mut worst: f64 = 0.0;
+                    let mut s = Budget::new(
+                        LinearSystem {
+                            a: a4m.clone(),
+                            n: 4,
+                        },
+                        3.0 * opts.max_point_s,
+                    );
+                    let r =
+                        solvers::integrate(&mut s, method, &tol4, &mut x, &grid4, &[], |_, xs| {
+                            if let Some(e) = exact4.get(k) {
+                                worst = worst.max((xs[0] - e[0]).abs()).max((xs[1] - e[1]).abs());
+                            }
+                            k += 1;
+                            ControlFlow::Continue(())
+                        });
+                    match s.result(r) {
+                        Ok((_, st)) => (Some(worst / 2f64.to_radians()), st),
+                        Err(_) => (None, SolverStats::default()),
+                    }
+                });
+                points.push(PeerPoint {
+                    implementation: "gyrolab 4state".into(),
+                    method: method.to_string(),
+                    rtol,
+                    atol: tol4.atol,
+                    error: res,
+                    wall_s: wall,
+                    rhs_evals: stats.rhs_evals,
+                });
+            }
+        }
+    }
+    Ok(PeerReport {
+        villarceau: serde_json::json!({
+            "g_over_a": v.g_over_a,
+            "delta": v.delta,
+            "gamma0": amplitude,
+            "period": period,
+            "periods": PEER_PERIODS,
+            "engine_rhs_ns": sim.rhs_cost_ns(),
+        }),
+        anschutz4: a4,
+        atol_factor,
+        points,
+    })
+}
+
+/// One run of `system` from `x0` to the end of `grid` (best wall time of a few), its error
+/// measured on the end state by `end_error(last, x0)`.
+#[allow(clippy::too_many_arguments)]
+fn end_state_point<S: OdeSystem>(
+    opts: &StudyOptions,
+    implementation: &str,
+    system: impl Fn() -> S,
+    x0: &[f64],
+    method: Method,
+    tol: &Tolerances,
+    grid: &OutputGrid,
+    end_error: &dyn Fn(&[f64], &[f64]) -> f64,
+) -> PeerPoint {
+    let ((res, stats), wall) = timed(opts, || {
+        let mut x = x0.to_vec();
+        let mut last = x0.to_vec();
+        let r = solvers::integrate(&mut system(), method, tol, &mut x, grid, &[], |_, xs| {
+            last.copy_from_slice(xs);
+            ControlFlow::Continue(())
+        });
+        match r {
+            Ok((_, s)) => (Some(end_error(&last, x0)), s),
+            Err(_) => (None, SolverStats::default()),
+        }
+    });
+    PeerPoint {
+        implementation: implementation.into(),
+        method: method.to_string(),
+        rtol: tol.rtol,
+        atol: tol.atol,
+        error: res,
+        wall_s: wall,
+        rhs_evals: stats.rhs_evals,
+    }
+}

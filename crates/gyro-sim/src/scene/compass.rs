@@ -1,0 +1,148 @@
+//! The `[compass]` table: which design the ship carries (with overrides), and how it starts.
+
+use super::SourceText;
+use crate::library;
+use gyro_model::error::InputError;
+use gyro_model::{CoordinateRole, Design};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct CompassFile {
+    design: String,
+    #[serde(default)]
+    design_overrides: BTreeMap<String, toml::Value>,
+    #[serde(default)]
+    azimuth_offset_deg: f64,
+    #[serde(default)]
+    tilt_offset_deg: f64,
+    /// Other coordinates' offsets by name, degrees.
+    #[serde(default)]
+    offsets_deg: BTreeMap<String, f64>,
+    #[serde(default = "yes")]
+    pub(super) start_from_equilibrium: bool,
+    /// `slow`: precessional rates from the precession equations (no nutation excited);
+    /// `rest`: every coordinate at rest relative to the Earth (a held compass let go).
+    #[serde(default = "slow")]
+    start_rates: String,
+    /// Compass pivot relative to the ship's roll centre: forward, port, up (m).
+    #[serde(default)]
+    pub(super) pivot_m: [f64; 3],
+}
+
+fn yes() -> bool {
+    true
+}
+fn slow() -> String {
+    "slow".into()
+}
+
+/// The design as read: its label (path or shipped name), the overrides applied, the design.
+pub(super) struct LoadedDesign {
+    pub(super) label: String,
+    pub(super) overrides: Vec<(String, toml::Value)>,
+    pub(super) design: Design,
+}
+
+/// Reads the design the scene names (or `design_override`), found next to the scene or shipped.
+pub(super) fn design(
+    c: &CompassFile,
+    design_override: Option<&String>,
+    dir: Option<&Path>,
+) -> Result<LoadedDesign, InputError> {
+    let design_ref = design_override.cloned().unwrap_or_else(|| c.design.clone());
+    let (label, design_text) = library::read_design(&design_ref, dir)?;
+    let overrides: Vec<(String, toml::Value)> = c
+        .design_overrides
+        .iter()
+        .map(|(k, v)| (k.clone(), v.clone()))
+        .collect();
+    let design = Design::from_toml(&label, &design_text, &overrides)?;
+    Ok(LoadedDesign {
+        label,
+        overrides,
+        design,
+    })
+}
+
+/// Whether the design has a spin motor (with `effects = "auto"` it is then compiled in unless
+/// the scene disables it; a motorless design compiles none).
+pub(super) fn has_motor(design: &Design) -> bool {
+    design
+        .bodies
+        .iter()
+        .any(|b| b.rotor.as_ref().is_some_and(|r| r.motor.is_some()))
+}
+
+/// The start offsets, (coordinate index, rad): azimuth and tilt by role, others by name.
+pub(super) fn offsets(
+    c: &CompassFile,
+    design: &Design,
+    src: &SourceText,
+) -> Result<Vec<(usize, f64)>, InputError> {
+    let mut offsets = Vec::new();
+    for (role, deg, key) in [
+        (
+            CoordinateRole::Azimuth,
+            c.azimuth_offset_deg,
+            "azimuth_offset_deg",
+        ),
+        (CoordinateRole::Tilt, c.tilt_offset_deg, "tilt_offset_deg"),
+    ] {
+        if !deg.is_finite() {
+            return Err(src.err(
+                Some("[compass]"),
+                key,
+                &format!("compass.{key}"),
+                "must be finite".into(),
+            ));
+        }
+        if deg != 0.0 {
+            let i = design.role_index(role).ok_or_else(|| {
+                src.err(
+                    Some("[compass]"),
+                    key,
+                    &format!("compass.{key}"),
+                    format!("design `{}` has no coordinate with this role", design.name),
+                )
+            })?;
+            offsets.push((i, deg.to_radians()));
+        }
+    }
+    for (name, deg) in &c.offsets_deg {
+        let i = design.coordinate_index(name).ok_or_else(|| {
+            src.err(
+                Some("[compass"),
+                name,
+                &format!("compass.offsets_deg.{name}"),
+                format!(
+                    "unknown coordinate (allowed: {})",
+                    design
+                        .coordinates
+                        .iter()
+                        .map(|c| c.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        })?;
+        offsets.push((i, deg.to_radians()));
+    }
+    Ok(offsets)
+}
+
+/// `start_rates`: `slow` (true) or `rest` (false).
+pub(super) fn slow_start(c: &CompassFile, src: &SourceText) -> Result<bool, InputError> {
+    match c.start_rates.as_str() {
+        "slow" => Ok(true),
+        "rest" => Ok(false),
+        other => Err(src.err(
+            Some("[compass]"),
+            "start_rates",
+            "compass.start_rates",
+            format!("unknown value `{other}` (allowed: slow, rest)"),
+        )),
+    }
+}
