@@ -4,5 +4,6 @@
 
 
 mod anschutz_statics;
+mod linalg_stiff;
 mod servo_plate;
 mod villarceau_equation;
