@@ -184,10 +184,15 @@ fn a_writer_killed_with_sigkill_recovers_to_a_prefix() {
     let dir = tmp_dir("sigkill");
     let path = dir.join("killed.mcap");
     let partial = partial_path(&path);
+    // libtest names a test by its path inside the binary, without the binary's crate name.
+    let child_test = match module_path!().split_once("::") {
+        Some((_, module)) => format!("{module}::sigkill_child"),
+        None => "sigkill_child".to_owned(),
+    };
     let mut child = std::process::Command::new(std::env::current_exe().unwrap())
         .args([
             "--exact",
-            "sigkill_child",
+            child_test.as_str(),
             "--nocapture",
             "--test-threads=1",
         ])

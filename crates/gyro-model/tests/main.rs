@@ -2,7 +2,6 @@
 //! link of the crate's dependency tree instead of one per file. Run one file's tests with
 //! `cargo test --release -p gyro-model --test integration FILE::`.
 
-
 mod anschutz_statics;
 mod linalg_stiff;
 mod servo_plate;

@@ -44,7 +44,10 @@ fn cpu_s() -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     // `cargo bench` appends `--bench`; the tool takes positional arguments only.
-    let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| a != "--bench")
+        .collect();
     let name = args.first().map_or("harbour-50n", String::as_str);
     let duration_s: f64 = args.get(1).map_or(Ok(86400.0), |s| s.parse())?;
     let rate_hz: Option<f64> = args.get(2).map(|s| s.parse()).transpose()?;

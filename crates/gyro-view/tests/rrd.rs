@@ -410,12 +410,13 @@ fn spawn_without_viewer_saves_next_to_the_run() {
         return;
     }
     let dir = workdir("spawn");
+    // libtest names a test by its path inside the binary, without the binary's crate name.
+    let this_test = match module_path!().split_once("::") {
+        Some((_, module)) => format!("{module}::spawn_without_viewer_saves_next_to_the_run"),
+        None => "spawn_without_viewer_saves_next_to_the_run".to_owned(),
+    };
     let status = Command::new(std::env::current_exe().expect("exe"))
-        .args([
-            "--exact",
-            "spawn_without_viewer_saves_next_to_the_run",
-            "--nocapture",
-        ])
+        .args(["--exact", this_test.as_str(), "--nocapture"])
         .env("GYRO_VIEW_SPAWN_CHILD", &dir)
         .env("PATH", dir.join("no-viewer-here"))
         .status()

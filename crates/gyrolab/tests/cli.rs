@@ -284,7 +284,10 @@ fn every_subcommand_takes_json() {
     for sub in &subcommands {
         let out = succeed(gyrolab().args([sub.as_str(), "--help"]));
         let text = String::from_utf8_lossy(&out.stdout);
-        assert!(text.contains("--json"), "`gyrolab {sub}` has no --json:\n{text}");
+        assert!(
+            text.contains("--json"),
+            "`gyrolab {sub}` has no --json:\n{text}"
+        );
     }
 }
 
@@ -294,11 +297,7 @@ fn compare_in_json_gives_one_row_per_run_and_the_plots() {
     let mut files = Vec::new();
     for (name, stem) in [("harbour-50n", "a"), ("harbour-50n", "b")] {
         let file = d.join(format!("{stem}.mcap"));
-        succeed(
-            gyrolab()
-                .args(["run", name, "--quiet", "-o"])
-                .arg(&file),
-        );
+        succeed(gyrolab().args(["run", name, "--quiet", "-o"]).arg(&file));
         files.push(file);
     }
     let out = succeed(
@@ -313,7 +312,11 @@ fn compare_in_json_gives_one_row_per_run_and_the_plots() {
     let rows = v["table"]["rows"].as_array().expect("rows");
     assert_eq!(rows.len(), 2, "{v}");
     for (row, file) in rows.iter().zip(&files) {
-        assert_eq!(row["path"].as_str(), Some(file.to_str().expect("utf-8")), "{row}");
+        assert_eq!(
+            row["path"].as_str(),
+            Some(file.to_str().expect("utf-8")),
+            "{row}"
+        );
         assert_eq!(row["scene"], "harbour-50n", "{row}");
         let period = row["period_s"].as_f64().expect("a fitted period");
         assert!((4000.0..5000.0).contains(&period), "{row}");
