@@ -302,6 +302,67 @@ pub struct CompiledModel<M: ShipMotion> {
     pub x0: Vec<f64>,
 }
 
+/// The spin motors a run simulates (none unless the effect is on): one per rotor with a motor.
+fn spin_motors(design: &Design, on: bool) -> Result<Vec<SpinMotor>, ModelError> {
+    if !on {
+        return Ok(Vec::new());
+    }
+    let motors: Vec<SpinMotor> = design
+        .bodies
+        .iter()
+        .enumerate()
+        .filter_map(|(bi, b)| {
+            let r = b.rotor.as_ref()?;
+            let m = r.motor?;
+            Some(SpinMotor {
+                body: bi,
+                polar_inertia_kg_m2: r.polar_inertia_kg_m2,
+                rated_spin_rad_per_s: r.spin_rad_per_s,
+                time_constant_s: m.time_constant_s,
+                initial_spin_rad_per_s: m.initial_spin_rad_per_s,
+            })
+        })
+        .collect();
+    if motors.len() > MAX_MOTORS {
+        return Err(ModelError::Invalid(format!(
+            "the design has {} spin motors; at most {MAX_MOTORS} are supported",
+            motors.len()
+        )));
+    }
+    Ok(motors)
+}
+
+/// The servo relations as an affine map from the independent coordinates to all of them,
+/// q = S q_ind + s0 (S row-major, n × n_ind): the independent coordinates (those no servo
+/// drives), S and s0.
+fn servo_substitution(design: &Design) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>), ModelError> {
+    let n = design.coordinates.len();
+    let independent: Vec<usize> = (0..n)
+        .filter(|&i| design.coordinates[i].servo.is_none())
+        .collect();
+    let ni = independent.len();
+    let mut servo_s = vec![0.0; n * ni];
+    let mut servo_s0 = vec![0.0; n];
+    for (col, &i) in independent.iter().enumerate() {
+        servo_s[i * ni + col] = 1.0;
+    }
+    for (i, c) in design.coordinates.iter().enumerate() {
+        if let Some(rel) = &c.servo {
+            servo_s0[i] = rel.constant;
+            for &(j, a) in &rel.linear {
+                let col = independent.iter().position(|&x| x == j).ok_or_else(|| {
+                    ModelError::Invalid(format!(
+                        "servo relation of `{}` reads a driven coordinate",
+                        c.name
+                    ))
+                })?;
+                servo_s[i * ni + col] += a;
+            }
+        }
+    }
+    Ok((independent, servo_s, servo_s0))
+}
+
 impl<M: ShipMotion> CompiledModel<M> {
     pub fn compile(design: Design, motion: M, opts: ModelOptions) -> Result<Self, ModelError> {
         let n = design.coordinates.len();
@@ -309,60 +370,13 @@ impl<M: ShipMotion> CompiledModel<M> {
             return Err(ModelError::TooManyCoordinates(n));
         }
         let mut effects = opts.effects;
-        let motors: Vec<SpinMotor> = if effects.spin_motor {
-            design
-                .bodies
-                .iter()
-                .enumerate()
-                .filter_map(|(bi, b)| {
-                    let r = b.rotor.as_ref()?;
-                    let m = r.motor?;
-                    Some(SpinMotor {
-                        body: bi,
-                        polar_inertia_kg_m2: r.polar_inertia_kg_m2,
-                        rated_spin_rad_per_s: r.spin_rad_per_s,
-                        time_constant_s: m.time_constant_s,
-                        initial_spin_rad_per_s: m.initial_spin_rad_per_s,
-                    })
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
-        if motors.len() > MAX_MOTORS {
-            return Err(ModelError::Invalid(format!(
-                "the design has {} spin motors; at most {MAX_MOTORS} are supported",
-                motors.len()
-            )));
-        }
+        let motors = spin_motors(&design, effects.spin_motor)?;
         // Reported effects are what is compiled: no motor state without a motor.
         effects.spin_motor = !motors.is_empty();
-        let nm = motors.len();
         let chain = Chain::from_design(&design, |f| effects.include_force(f));
         let body_axes = BodyAxesChain::from_design(&design, |f| effects.include_force(f));
-        let independent: Vec<usize> = (0..n)
-            .filter(|&i| design.coordinates[i].servo.is_none())
-            .collect();
+        let (independent, servo_s, servo_s0) = servo_substitution(&design)?;
         let ni = independent.len();
-        let mut servo_s = vec![0.0; n * ni];
-        let mut servo_s0 = vec![0.0; n];
-        for (col, &i) in independent.iter().enumerate() {
-            servo_s[i * ni + col] = 1.0;
-        }
-        for (i, c) in design.coordinates.iter().enumerate() {
-            if let Some(rel) = &c.servo {
-                servo_s0[i] = rel.constant;
-                for &(j, a) in &rel.linear {
-                    let col = independent.iter().position(|&x| x == j).ok_or_else(|| {
-                        ModelError::Invalid(format!(
-                            "servo relation of `{}` reads a driven coordinate",
-                            c.name
-                        ))
-                    })?;
-                    servo_s[i * ni + col] += a;
-                }
-            }
-        }
         let stationary = if motion.is_stationary() {
             let (r, w) = base_motion(&motion, design.root == Root::Ship, &effects.base, 0.0f64);
             Some(StationaryBase {
@@ -405,110 +419,133 @@ impl<M: ShipMotion> CompiledModel<M> {
             x_equilibrium: Vec::new(),
             x0: Vec::new(),
         };
-        // Initial state in the full layout.
-        // Full layout [q; q̇; Ω of each motor]: the equilibrium is the one at rated spin.
-        let mut x = vec![0.0; 2 * ni + nm];
-        for (k, m) in model.motors.iter().enumerate() {
+        let mut x = model.initial_state(&opts.initial)?;
+        model.classify_precessional(&x);
+        if opts.initial.slow_start {
+            model.slow_start(&mut x);
+        }
+        model.set_fidelity(opts.fidelity, x)?;
+        Ok(model)
+    }
+
+    /// The initial state in the full layout [q; q̇; Ω of each motor]: the equilibrium at rated
+    /// spin when asked for, then the start's motor spins, offsets and rates.
+    fn initial_state(&mut self, initial: &InitialCondition) -> Result<Vec<f64>, ModelError> {
+        let ni = self.independent.len();
+        let mut x = vec![0.0; 2 * ni + self.motors.len()];
+        for (k, m) in self.motors.iter().enumerate() {
             x[2 * ni + k] = m.rated_spin_rad_per_s;
         }
-        model.update_free_rotors(&x);
-        if opts.initial.from_equilibrium {
-            let q = model.equilibrium(&x[..ni])?;
+        self.update_free_rotors(&x);
+        if initial.from_equilibrium {
+            let q = self.equilibrium(&x[..ni])?;
             x[..ni].copy_from_slice(&q);
-            model.update_free_rotors(&x);
+            self.update_free_rotors(&x);
         }
-        model.x_equilibrium = x.clone();
-        for (k, m) in model.motors.iter().enumerate() {
+        self.x_equilibrium = x.clone();
+        for (k, m) in self.motors.iter().enumerate() {
             x[2 * ni + k] = m.initial_spin_rad_per_s;
         }
-        for &(i, off) in &opts.initial.offsets_rad {
-            let col = model
-                .independent
-                .iter()
-                .position(|&j| j == i)
-                .ok_or_else(|| {
-                    ModelError::Invalid(format!(
-                        "cannot offset the servo-driven coordinate `{}`",
-                        model.design.coordinates[i].name
-                    ))
-                })?;
-            x[col] += off;
+        for &(i, off) in &initial.offsets_rad {
+            x[self.independent_column(i, "offset")?] += off;
         }
-        for &(i, rate) in &opts.initial.rates_rad_per_s {
-            let col = model
-                .independent
-                .iter()
-                .position(|&j| j == i)
-                .ok_or_else(|| {
-                    ModelError::Invalid(format!(
-                        "cannot set the rate of the servo-driven coordinate `{}`",
-                        model.design.coordinates[i].name
-                    ))
-                })?;
-            x[ni + col] = rate;
+        for &(i, rate) in &initial.rates_rad_per_s {
+            x[ni + self.independent_column(i, "set the rate of")?] = rate;
         }
-        // A free rotor's absolute spin is fixed by the start: relative spin + carrier rate.
-        model.update_free_rotors(&x);
-        model.precessional = model.find_precessional(&x);
-        model.precessional_rows = (0..ni).filter(|&j| model.precessional[j]).collect();
-        model.inertial_rows = (0..ni).filter(|&j| !model.precessional[j]).collect();
-        model.drop_full = vec![false; n];
-        for (col, &i) in model.independent.iter().enumerate() {
-            model.drop_full[i] = model.precessional[col];
+        Ok(x)
+    }
+
+    /// The state column of design coordinate `i`, or an error naming it when a servo drives it
+    /// (`what` is the verb of the message: "cannot {what} the servo-driven coordinate …").
+    fn independent_column(&self, i: usize, what: &str) -> Result<usize, ModelError> {
+        self.independent
+            .iter()
+            .position(|&j| j == i)
+            .ok_or_else(|| {
+                ModelError::Invalid(format!(
+                    "cannot {what} the servo-driven coordinate `{}`",
+                    self.design.coordinates[i].name
+                ))
+            })
+    }
+
+    /// Which coordinates the spin couples gyroscopically at the start `x` (full layout), and the
+    /// rows that follow from that. A free rotor's absolute spin is fixed by the start first:
+    /// relative spin + carrier rate.
+    fn classify_precessional(&mut self, x: &[f64]) {
+        let (n, ni) = (self.design.coordinates.len(), self.independent.len());
+        self.update_free_rotors(x);
+        self.precessional = self.find_precessional(x);
+        self.precessional_rows = (0..ni).filter(|&j| self.precessional[j]).collect();
+        self.inertial_rows = (0..ni).filter(|&j| !self.precessional[j]).collect();
+        self.drop_full = vec![false; n];
+        for (col, &i) in self.independent.iter().enumerate() {
+            self.drop_full[i] = self.precessional[col];
         }
-        if opts.initial.slow_start && model.precessional.iter().any(|p| *p) {
-            let mut xg: Vec<f64> = x[..ni].to_vec();
+    }
+
+    /// The gyroscopic layout of a full-layout state: q, the rates of the inertial coordinates,
+    /// the motors' spins.
+    fn gyroscopic_state(&self, x: &[f64]) -> Vec<f64> {
+        let ni = self.independent.len();
+        let mut xg: Vec<f64> = x[..ni].to_vec();
+        for col in 0..ni {
+            if !self.precessional[col] {
+                xg.push(x[ni + col]);
+            }
+        }
+        xg.extend_from_slice(&x[2 * ni..]);
+        xg
+    }
+
+    /// Starts the precessional coordinates at the rates the gyroscopic equations give them.
+    fn slow_start(&self, x: &mut [f64]) {
+        if !self.precessional.iter().any(|p| *p) {
+            return;
+        }
+        let ni = self.independent.len();
+        let xg = self.gyroscopic_state(x);
+        let mut dx = vec![0.0; xg.len()];
+        if self.rhs_generic(Fidelity::Gyroscopic, 0.0, &xg, &mut dx) {
             for col in 0..ni {
-                if !model.precessional[col] {
-                    xg.push(x[ni + col]);
-                }
-            }
-            xg.extend_from_slice(&x[2 * ni..]);
-            let dim_g = xg.len();
-            let mut dx = vec![0.0; dim_g];
-            if model.rhs_generic(Fidelity::Gyroscopic, 0.0, &xg, &mut dx) {
-                for col in 0..ni {
-                    if model.precessional[col] {
-                        x[ni + col] = dx[col];
-                    }
+                if self.precessional[col] {
+                    x[ni + col] = dx[col];
                 }
             }
         }
-        model.fidelity = opts.fidelity;
-        match opts.fidelity {
-            Fidelity::Full => model.x0 = x,
+    }
+
+    /// Sets the fidelity the model runs at and its initial state `x0` in that layout (`x` is
+    /// the full-layout start); the linear model's matrix is the full Jacobian at equilibrium.
+    fn set_fidelity(&mut self, fidelity: Fidelity, x: Vec<f64>) -> Result<(), ModelError> {
+        self.fidelity = fidelity;
+        match fidelity {
+            Fidelity::Full => self.x0 = x,
             Fidelity::Gyroscopic => {
-                if !model.precessional.iter().any(|p| *p) {
+                if !self.precessional.iter().any(|p| *p) {
                     // Nothing is gyroscopically coupled (e.g. a one-coordinate gyroscope):
                     // the gyroscopic model is the full one.
-                    model.fidelity = Fidelity::Full;
-                    model.x0 = x;
+                    self.fidelity = Fidelity::Full;
+                    self.x0 = x;
                 } else {
-                    let mut x0: Vec<f64> = x[..ni].to_vec();
-                    for col in 0..ni {
-                        if !model.precessional[col] {
-                            x0.push(x[ni + col]);
-                        }
-                    }
-                    x0.extend_from_slice(&x[2 * ni..]);
-                    model.x0 = x0;
+                    self.x0 = self.gyroscopic_state(&x);
                     // Check the precessional block is solvable now rather than mid-run.
-                    let mut dx = vec![0.0; model.dim()];
-                    if !model.rhs_generic(Fidelity::Gyroscopic, 0.0, &model.x0, &mut dx) {
+                    let mut dx = vec![0.0; self.dim()];
+                    if !self.rhs_generic(Fidelity::Gyroscopic, 0.0, &self.x0, &mut dx) {
                         return Err(ModelError::Singular("the precessional equations cannot be solved for their rates (use fidelity = full)".into()));
                     }
                 }
             }
             Fidelity::Linear => {
-                let xe = model.x_equilibrium.clone();
-                let dim = 2 * ni + nm;
+                let xe = self.x_equilibrium.clone();
+                let dim = x.len();
                 let mut a = vec![0.0; dim * dim];
-                model.jacobian_at(Fidelity::Full, 0.0, &xe, &mut a);
-                model.linear_a = a;
-                model.x0 = x;
+                self.jacobian_at(Fidelity::Full, 0.0, &xe, &mut a);
+                self.linear_a = a;
+                self.x0 = x;
             }
         }
-        Ok(model)
+        Ok(())
     }
 
     pub fn dim(&self) -> usize {
