@@ -332,10 +332,18 @@ fn spin_motors(design: &Design, on: bool) -> Result<Vec<SpinMotor>, ModelError> 
     Ok(motors)
 }
 
-/// The servo relations as an affine map from the independent coordinates to all of them,
-/// q = S q_ind + s0 (S row-major, n × n_ind): the independent coordinates (those no servo
-/// drives), S and s0.
-fn servo_substitution(design: &Design) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>), ModelError> {
+/// The servo relations as an affine map from the independent coordinates to all of them:
+/// q = S q_ind + s0.
+struct ServoSubstitution {
+    /// The design coordinates no servo drives, in order (the state's coordinates).
+    independent: Vec<usize>,
+    /// S, row-major, n × n_ind.
+    s: Vec<f64>,
+    /// s0, n.
+    s0: Vec<f64>,
+}
+
+fn servo_substitution(design: &Design) -> Result<ServoSubstitution, ModelError> {
     let n = design.coordinates.len();
     let independent: Vec<usize> = (0..n)
         .filter(|&i| design.coordinates[i].servo.is_none())
@@ -360,7 +368,11 @@ fn servo_substitution(design: &Design) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>
             }
         }
     }
-    Ok((independent, servo_s, servo_s0))
+    Ok(ServoSubstitution {
+        independent,
+        s: servo_s,
+        s0: servo_s0,
+    })
 }
 
 impl<M: ShipMotion> CompiledModel<M> {
@@ -375,7 +387,11 @@ impl<M: ShipMotion> CompiledModel<M> {
         effects.spin_motor = !motors.is_empty();
         let chain = Chain::from_design(&design, |f| effects.include_force(f));
         let body_axes = BodyAxesChain::from_design(&design, |f| effects.include_force(f));
-        let (independent, servo_s, servo_s0) = servo_substitution(&design)?;
+        let ServoSubstitution {
+            independent,
+            s: servo_s,
+            s0: servo_s0,
+        } = servo_substitution(&design)?;
         let ni = independent.len();
         let stationary = if motion.is_stationary() {
             let (r, w) = base_motion(&motion, design.root == Root::Ship, &effects.base, 0.0f64);
