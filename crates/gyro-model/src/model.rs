@@ -454,6 +454,14 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
         self.update_free_rotors(&x);
         if initial.from_equilibrium {
+            // On a ship-rooted chain the azimuth is counted from the ship's head: start the
+            // search on the meridian, not on the lubber line.
+            if self.design.root == Root::Ship
+                && let Some(i) = self.role(CoordinateRole::Azimuth)
+                && let Some(col) = self.independent.iter().position(|&j| j == i)
+            {
+                x[col] = self.motion.kinematics(0.0f64).heading_rad;
+            }
             let q = self.equilibrium(&x[..ni])?;
             x[..ni].copy_from_slice(&q);
             self.update_free_rotors(&x);
@@ -1299,12 +1307,39 @@ impl<M: ShipMotion> CompiledModel<M> {
             .flat_map(|i| (0..ni).map(move |j| (i, j)))
             .map(|(i, j)| skew(i, j).abs())
             .fold(0.0, f64::max);
+        let mut precessional = vec![false; ni];
         if big == 0.0 {
-            return vec![false; ni];
+            return precessional;
         }
-        (0..ni)
-            .map(|i| (0..ni).any(|j| skew(i, j).abs() > 1e-3 * big))
-            .collect()
+        // The precessional block must be solvable: its skew matrix nonsingular, so its
+        // coordinates come in pairs. Pair greedily, the strongest couplings first, pairs of the
+        // design's azimuth and tilt before others (a pendulous crosspiece tilts the spin axis as
+        // the case does, and only one of the two can lose its inertia), with the
+        // threshold at round-off (a small gyro's jω is ~10⁻³ of the main one's, and counts).
+        let coordinate = |col: usize| &self.design.coordinates[self.independent[col]];
+        let allowed = |col: usize| coordinate(col).precessional != Some(false);
+        let roles = |i: usize, j: usize| {
+            [i, j]
+                .iter()
+                .filter(|&&c| coordinate(c).role.is_some())
+                .count()
+        };
+        let mut pairs: Vec<(usize, usize)> = (0..ni)
+            .flat_map(|i| (i + 1..ni).map(move |j| (i, j)))
+            .filter(|&(i, j)| allowed(i) && allowed(j) && skew(i, j).abs() > 1e-9 * big)
+            .collect();
+        pairs.sort_by(|a, b| {
+            roles(b.0, b.1)
+                .cmp(&roles(a.0, a.1))
+                .then(skew(b.0, b.1).abs().total_cmp(&skew(a.0, a.1).abs()))
+        });
+        for (i, j) in pairs {
+            if !precessional[i] && !precessional[j] {
+                precessional[i] = true;
+                precessional[j] = true;
+            }
+        }
+        precessional
     }
 
     /// Sets the momentum of free rotors from a state: relative spin plus the carrier's rate.

@@ -2,7 +2,8 @@
 //! checks the engine is held to (the engine never uses them to move anything).
 //!
 //! Sources: `shared/physics/foucault-villarceau.md` (Villarceau 1855, eqs. 42–47) and
-//! `shared/physics/anschutz-1906.md` (Beghin ch. II–III, eqs. 10, 18, 19–22, §30, §40).
+//! `shared/physics/anschutz-1906.md` (Beghin ch. II–III, eqs. 10, 18, 19–22, §30, §40),
+//! `shared/physics/sperry-1911-and-slough.md` (Beghin ch. IV, eqs. 6, 10, 11, 40).
 
 use crate::constants::{EARTH_RADIUS_M, EARTH_RATE_RAD_PER_S, STANDARD_GRAVITY_M_PER_S2};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
@@ -205,6 +206,85 @@ impl Anschutz {
     /// Latitude at which the tilt of the oscillation turns into revolution: θ_max = 2√(τ/aP).
     pub fn revolution_threshold_tilt(&self) -> f64 {
         2.0 * (self.tau() / self.pendulous_moment).sqrt()
+    }
+}
+
+/// Beghin's Sperry 1911 constants (ch. IV, §42–45), SI. `latitude_dial_rad` is the bail's
+/// setting η (Qlη + IΩε sin L_dial = 0 when the dial is set right).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sperry1911 {
+    /// Main spin momentum IΩ, N·m·s.
+    pub spin_momentum: f64,
+    /// The bail's moment Ql, N·m.
+    pub bail_moment: f64,
+    /// The gyro-ballistic pendulum's moment ϖb, N·m.
+    pub pendulum_moment: f64,
+    /// The overload's moment ap, N·m.
+    pub overload_moment: f64,
+    /// The roller's offset angle ρ, rad.
+    pub roller_offset: f64,
+    /// The small gyro's spin momentum jω, N·m·s (its sign is the spin's).
+    pub small_spin_momentum: f64,
+    /// The small gyro's spring k (N·m/rad) and damper k₁ (N·m·s/rad).
+    pub spring: f64,
+    pub damper: f64,
+    /// The bail's dial setting η, rad.
+    pub dial_eta: f64,
+    pub latitude_rad: f64,
+}
+
+impl Sperry1911 {
+    /// τ = IΩε cos L.
+    pub fn tau(&self) -> f64 {
+        self.spin_momentum * EARTH_RATE_RAD_PER_S * self.latitude_rad.cos()
+    }
+    /// 𝒫 = Ql + ϖb + ap, the precise model's whole tilt moment (§45).
+    pub fn pendulous_moment(&self) -> f64 {
+        self.bail_moment + self.pendulum_moment + self.overload_moment
+    }
+    /// The elementary undamped period (eq. 6): 2π√(IΩ/((Ql + ϖb)ε cos L)).
+    pub fn elementary_period(&self) -> f64 {
+        TAU * (self.spin_momentum
+            / ((self.bail_moment + self.pendulum_moment)
+                * EARTH_RATE_RAD_PER_S
+                * self.latitude_rad.cos()))
+        .sqrt()
+    }
+    /// The damping factor h = Qlρ/(2IΩ) of eq. 11, 1/s.
+    pub fn damping_factor(&self) -> f64 {
+        self.bail_moment * self.roller_offset / (2.0 * self.spin_momentum)
+    }
+    /// The latitude error of eq. 10 (errata: ρ restored), ζ = −ρ tan L, West positive.
+    pub fn latitude_error(&self) -> f64 {
+        -self.roller_offset * self.latitude_rad.tan()
+    }
+    /// Roots of the characteristic equation (40):
+    /// (I²Ω²r² + QlρIΩr + τ𝒫)(j²ω²r² + k₁ϖb r + kϖb) + 𝒫jωr(k + k₁r)(jωr + Qlη) = 0,
+    /// the compass pair first, then the gyro-ballistic pair.
+    pub fn characteristic_roots(&self) -> [(f64, f64); 4] {
+        let (h, ql, wb, p, j) = (
+            self.spin_momentum,
+            self.bail_moment,
+            self.pendulum_moment,
+            self.pendulous_moment(),
+            self.small_spin_momentum,
+        );
+        let (k, k1, eta) = (self.spring, self.damper, self.dial_eta);
+        let a = [self.tau() * p, ql * self.roller_offset * h, h * h];
+        let b = [k * wb, k1 * wb, j * j];
+        let mut coef = [0.0; 5];
+        for (i, ai) in a.iter().enumerate() {
+            for (l, bl) in b.iter().enumerate() {
+                coef[i + l] += ai * bl;
+            }
+        }
+        // 𝒫jω r (k + k₁r)(jωr + Qlη)
+        coef[1] += p * j * k * ql * eta;
+        coef[2] += p * j * (k * j + k1 * ql * eta);
+        coef[3] += p * j * k1 * j;
+        let mut roots = polynomial_roots(&coef);
+        roots.sort_by(|x, y| (x.0 * x.0 + x.1 * x.1).total_cmp(&(y.0 * y.0 + y.1 * y.1)));
+        [roots[0], roots[1], roots[2], roots[3]]
     }
 }
 

@@ -5,4 +5,5 @@
 mod anschutz_statics;
 mod linalg_stiff;
 mod servo_plate;
+mod sperry_statics;
 mod villarceau_equation;

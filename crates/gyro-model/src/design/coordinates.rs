@@ -16,6 +16,10 @@ pub(super) struct CoordinateFile {
     role: Option<String>,
     /// Servo relation (this coordinate is driven to equal the expression).
     servo: Option<String>,
+    /// In `gyroscopic` fidelity: force this coordinate's rate to be a state (`false`, e.g. a
+    /// pendulous crosspiece whose own inertia sets its motion) or allow it to be precessional
+    /// (`true`). Unset: the engine decides from the gyroscopic couplings.
+    precessional: Option<bool>,
 }
 
 /// Checks the parameters (finite) and reads the coordinates: names unique and apart from the
@@ -105,6 +109,7 @@ pub(super) fn coordinates(
             description: c.description.clone(),
             role,
             servo,
+            precessional: c.precessional,
         });
     }
     // A servo relation must read only non-driven coordinates (no chains of servos).

@@ -122,6 +122,9 @@ pub struct Coordinate {
     pub role: Option<CoordinateRole>,
     /// `Some` for a servo-driven coordinate: q = relation(q) (linear), substituted after.
     pub servo: Option<QuadExpr>,
+    /// The design's word on the gyroscopic fidelity: `Some(false)` keeps the rate a state,
+    /// `Some(true)` allows the coordinate to be precessional, `None` lets the engine decide.
+    pub precessional: Option<bool>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -46,19 +46,33 @@ pub(super) struct LoadedDesign {
     pub(super) design: Design,
 }
 
+/// The design parameter a scene sets to its starting latitude (degrees).
+pub const LATITUDE_DIAL: &str = "latitude_dial_deg";
+
 /// Reads the design the scene names (or `design_override`), found next to the scene or shipped.
 pub(super) fn design(
     c: &CompassFile,
     design_override: Option<&String>,
     dir: Option<&Path>,
+    latitude_deg: f64,
 ) -> Result<LoadedDesign, InputError> {
     let design_ref = design_override.cloned().unwrap_or_else(|| c.design.clone());
     let (label, design_text) = library::read_design(&design_ref, dir)?;
-    let overrides: Vec<(String, toml::Value)> = c
+    let mut overrides: Vec<(String, toml::Value)> = c
         .design_overrides
         .iter()
         .map(|(k, v)| (k.clone(), v.clone()))
         .collect();
+    // A latitude dial (a design parameter `latitude_dial_deg`, e.g. the Sperry's bail setting)
+    // is set to the scene's starting latitude, as the navigator sets it, unless the scene sets it.
+    let dial = format!("parameters.{LATITUDE_DIAL}");
+    let has_dial = toml::from_str::<toml::Value>(&design_text)
+        .ok()
+        .and_then(|v| v.get("parameters")?.get(LATITUDE_DIAL).cloned())
+        .is_some();
+    if has_dial && !overrides.iter().any(|(k, _)| *k == dial) {
+        overrides.push((dial, toml::Value::Float(latitude_deg)));
+    }
     let design = Design::from_toml(&label, &design_text, &overrides)?;
     Ok(LoadedDesign {
         label,

@@ -133,7 +133,7 @@ impl Scene {
         let mut effects = simulation::effects(sim, &program, force_all, &src)?;
         let (fidelity, method, tolerances) = simulation::solver(sim, ov, &src)?;
         let c = &f.compass;
-        let loaded = compass::design(c, ov.design.as_ref(), dir)?;
+        let loaded = compass::design(c, ov.design.as_ref(), dir, f.start.latitude_deg)?;
         // Spin-motor dynamics: compiled when the design has a motor and the scene does not
         // disable it (with `effects = "all"` it is asked for; a motorless design compiles none).
         if !force_all {
