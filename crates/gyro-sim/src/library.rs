@@ -12,7 +12,8 @@ macro_rules! shipped {
 }
 
 /// Shipped designs: (name, TOML text).
-pub const DESIGNS: &[(&str, &str)] = shipped!("designs"; "foucault-gyroscope", "anschutz-1906");
+pub const DESIGNS: &[(&str, &str)] =
+    shipped!("designs"; "foucault-gyroscope", "anschutz-1906", "sperry-1911");
 
 /// Shipped scenes: (name, TOML text).
 pub const SCENES: &[(&str, &str)] = shipped!("scenes";
@@ -20,6 +21,9 @@ pub const SCENES: &[(&str, &str)] = shipped!("scenes";
     "run-north-30kn", "speed-change-20kn", "turn-90", "turn-180", "zigzag-45",
     "rolling-cardinal", "rolling-intercardinal",
     "foucault-azimuth-45n", "foucault-latitude-45n",
+    "sperry-harbour-0n", "sperry-harbour-35n", "sperry-harbour-60n",
+    "sperry-run-north-30kn", "sperry-speed-change-20kn", "sperry-turn-90", "sperry-turn-180",
+    "sperry-zigzag-45", "sperry-rolling-cardinal", "sperry-rolling-intercardinal",
 );
 
 /// One-line description of a TOML file (its `description` key).

@@ -16,4 +16,5 @@ mod record_stats;
 mod ship;
 mod solvers;
 mod solvers_alloc;
+mod sperry;
 mod villarceau;
