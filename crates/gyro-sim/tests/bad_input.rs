@@ -192,3 +192,41 @@ fn design_override_of_a_missing_key_names_it() {
         "{e}"
     );
 }
+
+fn sperry_text() -> String {
+    std::fs::read_to_string(format!(
+        "{}/../../designs/sperry-1911.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("design")
+}
+
+/// The Sperry's relations: a contact naming an unknown coordinate, a servo reading itself, a
+/// servo naming an unknown coordinate, each refused with file, line and key.
+#[test]
+fn bad_contact_and_servo_relations_are_refused() {
+    let contact = "theta + (zeta - xi) * (alpha - roller_offset_rad) + dial_eta_rad";
+    let text = sperry_text().replace(
+        contact,
+        "theta + (zeta - psi) * (alpha - roller_offset_rad)",
+    );
+    let e = design_error(&text);
+    assert_eq!(e.key, "body.bail.hinge.angle_rad", "{e}");
+    assert!(e.message.contains("unknown name `psi`"), "{e}");
+    assert_eq!(e.line, Some(line_of(&text, "(zeta - psi)")));
+
+    let text = sperry_text().replace("servo = \"zeta\"", "servo = \"xi\"");
+    let e = design_error(&text);
+    assert_eq!(e.key, "coordinate.xi.servo", "{e}");
+    assert!(e.message.contains("itself servo-driven"), "{e}");
+    assert_eq!(e.line, Some(line_of(&text, "servo = \"xi\"")));
+
+    let text = sperry_text().replace("servo = \"zeta\"", "servo = \"zeta_ring\"");
+    let e = design_error(&text);
+    assert_eq!(e.key, "coordinate.xi.servo", "{e}");
+    assert!(e.message.contains("unknown name `zeta_ring`"), "{e}");
+
+    let text = sperry_text().replace("servo = \"zeta\"", "servo = \"zeta * theta\"");
+    let e = design_error(&text);
+    assert!(e.message.contains("linear"), "{e}");
+}

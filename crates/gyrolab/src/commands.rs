@@ -254,6 +254,8 @@ pub fn demo(out: &Path, json: bool) -> Result<ExitCode, CliError> {
         "harbour-50n",
         "run-north-30kn",
         "speed-change-20kn",
+        "sperry-harbour-35n",
+        "sperry-speed-change-20kn",
     ];
     let mut rows = Vec::new();
     let mut lines = Table::new(&[
@@ -486,12 +488,14 @@ pub fn compare(
 }
 
 /// The baseline scene set: small and fast, covering settling, speed error, a speed change and
-/// the exact Foucault reference.
-pub const REGRESS_SCENES: [&str; 4] = [
+/// the exact Foucault reference, for every compass that has them.
+pub const REGRESS_SCENES: [&str; 6] = [
     "foucault-azimuth-45n",
     "harbour-50n",
     "run-north-30kn",
     "speed-change-20kn",
+    "sperry-harbour-35n",
+    "sperry-speed-change-20kn",
 ];
 
 pub fn regress(
