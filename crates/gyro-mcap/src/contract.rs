@@ -4,8 +4,8 @@
 //! record names and keys, status strings, frame names and the body-shape vocabulary from here,
 //! so a name is changed in one place.
 //!
-//! One module per channel ([`compass_state`], [`ship_state`], [`events`], [`solver_stats`],
-//! [`tf`]: its topic, schema name, field names and the schema builder), one per metadata record
+//! One module per channel ([`compass_state`], [`ship_state`], [`energy`], [`events`],
+//! [`solver_stats`], [`tf`]: its topic, schema name, field names and the schema builder), one per metadata record
 //! ([`run_record`], [`result_record`], [`design_constants_record`], [`scene_record`],
 //! [`design_record`], [`bodies_record`]), the run's [`status`] strings, the [`attachments`], and
 //! [`BodyShape`], the shapes a body is drawn with. Nothing here knows physics: values come from
@@ -97,6 +97,42 @@ pub mod ship_state {
         (GRAVITY_NORTH_M_PER_S2, "m/s^2"),
         (GRAVITY_WEST_M_PER_S2, "m/s^2"),
         (GRAVITY_UP_M_PER_S2, "m/s^2"),
+    ];
+
+    pub fn schema() -> RecordSchema {
+        RecordSchema {
+            full_name: SCHEMA.into(),
+            fields: FIELDS.iter().map(|(n, u)| FieldSpec::f64(n, u)).collect(),
+        }
+    }
+}
+
+/// `/compass/energy`: the energy balance at every output sample, when the scene asks for it
+/// (`record_energy = true`): Jacobi's integral h = T₂ − T₀ + V and the powers that change it.
+pub mod energy {
+    use super::{FieldSpec, RecordSchema};
+
+    pub const TOPIC: &str = "/compass/energy";
+    pub const SCHEMA: &str = "gyrolab.Energy";
+    pub use super::TIME_S;
+    pub const ENERGY_J: &str = "energy_j";
+    pub const KINETIC_J: &str = "kinetic_j";
+    pub const FRAME_KINETIC_J: &str = "frame_kinetic_j";
+    pub const POTENTIAL_J: &str = "potential_j";
+    pub const SERVO_POWER_W: &str = "servo_power_w";
+    pub const DAMPER_POWER_W: &str = "damper_power_w";
+    pub const APPLIED_POWER_W: &str = "applied_power_w";
+
+    /// Field names and units, in order.
+    pub const FIELDS: [(&str, &str); 8] = [
+        (TIME_S, "s"),
+        (ENERGY_J, "J"),
+        (KINETIC_J, "J"),
+        (FRAME_KINETIC_J, "J"),
+        (POTENTIAL_J, "J"),
+        (SERVO_POWER_W, "W"),
+        (DAMPER_POWER_W, "W"),
+        (APPLIED_POWER_W, "W"),
     ];
 
     pub fn schema() -> RecordSchema {

@@ -593,6 +593,22 @@ fn coordinate_forces<T: Real, const N: usize>(
             } => {
                 qf[*coordinate] += torque.eval(q_real);
             }
+            Force::Servo {
+                coordinate,
+                relation,
+                stiffness,
+                damping,
+                ..
+            } => {
+                let i = *coordinate;
+                qf[i] -= (q_real[i] - relation.eval(q_real)) * *stiffness;
+                let mut g = [T::zero(); N];
+                relation.add_gradient(q_real, &mut g[..n]);
+                g[i] -= T::one();
+                for k in 0..n {
+                    k_out[i][k] += g[k] * *damping;
+                }
+            }
             Force::BodyForce { .. } => {}
         }
     }

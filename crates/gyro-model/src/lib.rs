@@ -33,11 +33,11 @@ mod model;
 mod reference_engine;
 pub mod theory;
 
-pub use design::{CoordinateRole, Design, Root, Shape, SpinMode};
+pub use design::{CoordinateRole, Design, Force, Root, Shape, SpinMode};
 pub use dual::{Jet, Real};
 pub use earth::{BaseEffects, Moored, ShipKinematics, ShipMotion};
 pub use error::InputError;
 pub use model::{
-    BodyPose, CompiledModel, EFFECT_NAMES, Effects, Fidelity, InitialCondition, ModelError,
-    ModelOptions, Readout,
+    BodyPose, CompiledModel, EFFECT_NAMES, Effects, Energetics, Fidelity, InitialCondition,
+    ModelError, ModelOptions, Readout,
 };

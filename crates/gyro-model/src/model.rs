@@ -166,7 +166,7 @@ impl Effects {
         match f {
             Force::Damper { .. } => self.friction,
             Force::BodyForce { .. } | Force::Generalized { .. } => self.damper,
-            Force::Spring { .. } => true,
+            Force::Spring { .. } | Force::Servo { .. } => true,
         }
     }
 }
@@ -217,6 +217,29 @@ impl fmt::Display for ModelError {
     }
 }
 impl std::error::Error for ModelError {}
+
+/// The energy balance of a state (full fidelity), from the world-axes reference engine with every
+/// coordinate, servo-driven ones included. On a stationary base (a harbour: the Lagrangian does
+/// not depend on time) Jacobi's integral h = T₂ − T₀ + V changes only by the work of what is not
+/// in the Lagrangian: dh/dt = servo + damper + applied power. T₂ is the kinetic energy of the
+/// rates, T₀ that of the frame's rotation with the rotors' held momenta (−T₀ is the Earth rate's
+/// directive energy), V the weight and springs.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Energetics {
+    /// Jacobi's integral h = T₂ − T₀ + V, J.
+    pub energy_j: f64,
+    /// Its terms: T₂, T₀ and V, J (h is their difference: its round-off is relative to them).
+    pub kinetic_j: f64,
+    pub frame_kinetic_j: f64,
+    pub potential_j: f64,
+    /// Power the servos put in, W: each driven coordinate's equation residual (the torque its
+    /// servo applies) times its rate. Beghin ch. I: d(T − U) + servo work = 0 without losses.
+    pub servo_power_w: f64,
+    /// Power of the dampers (≤ 0), W.
+    pub damper_power_w: f64,
+    /// Power of the body forces and generalised forces (air jets, circulatory torques), W.
+    pub applied_power_w: f64,
+}
 
 /// What the card shows and what the chain does at one instant.
 #[derive(Clone, Debug, PartialEq)]
@@ -785,6 +808,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             m: &mut m[..n * n],
             k: &mut k[..n * n],
             c: &mut c[..n],
+            energies: [T::zero(); 3],
         };
         evaluate_any(&self.chain, &inp, &mut out);
         // Rows of the non-driven coordinates only; driven columns folded into their drivers.
@@ -1451,6 +1475,119 @@ impl<M: ShipMotion> CompiledModel<M> {
             qd,
             poses,
         }
+    }
+
+    /// The equilibrium in the model's own state layout (`x_equilibrium` is in the full one).
+    pub fn equilibrium_state(&self) -> Vec<f64> {
+        match self.fidelity {
+            Fidelity::Gyroscopic => self.gyroscopic_state(&self.x_equilibrium),
+            _ => self.x_equilibrium.clone(),
+        }
+    }
+
+    /// The energy balance at (t, x) in the model's own layout ([`Energetics`]). In `gyroscopic`
+    /// fidelity the model is Lagrange's for L with the precessional coordinates' quadratic kinetic
+    /// energy dropped (and that of servo-driven coordinates that follow them), so its h is that
+    /// L's energy function, T₂ − T₀ + V with T₂ at the inertial rates only, and the same balance
+    /// holds. `None` where the equations are singular.
+    pub fn energetics(&self, t: f64, x: &[f64]) -> Option<Energetics> {
+        const MX: usize = MAX_COORDINATES + 1;
+        let (n, ni) = (self.chain.n, self.independent.len());
+        let mut dx = vec![0.0; self.dim()];
+        if !self.rhs(t, x, &mut dx) {
+            return None;
+        }
+        let (q_full, qd_full) = self.full_coordinates(t, x);
+        let (mut q, mut qd, mut u, mut qdd) = ([0.0; MX], [0.0; MX], [0.0; MX], [0.0; MX]);
+        q[..n].copy_from_slice(&q_full);
+        qd[..n].copy_from_slice(&qd_full);
+        // Which coordinates lost their quadratic kinetic energy, and the accelerations of the
+        // others (from ẋ; precessional ones have none and need none).
+        let gyroscopic = self.fidelity == Fidelity::Gyroscopic;
+        let mut drop = vec![false; n];
+        let mut qdd_ind = [0.0; MX];
+        let mut inertial = 0;
+        for (col, &i) in self.independent.iter().enumerate() {
+            if gyroscopic && self.precessional[col] {
+                drop[i] = true;
+            } else {
+                qdd_ind[col] = dx[ni + inertial];
+                inertial += 1;
+            }
+        }
+        for (i, c) in self.design.coordinates.iter().enumerate() {
+            if let Some(rel) = &c.servo {
+                drop[i] = rel.coordinates().iter().any(|&j| drop[j]);
+            }
+        }
+        self.expand(&qdd_ind[..ni], &mut qdd[..n], false);
+        for i in 0..n {
+            u[i] = if drop[i] { 0.0 } else { qd[i] };
+        }
+        let drop_quadratic: &[bool] = if gyroscopic { &drop } else { &[] };
+        let (r, w, g) = self.base_at(t);
+        // The equations of every coordinate, with all forces and with some only: the
+        // differences are the dampers' K, the applied forces' c and a finite servo's torque.
+        let eval = |chain: &Chain| {
+            let (mut m, mut k, mut c) = ([0.0; MX * MX], [0.0; MX * MX], [0.0; MX]);
+            let inp = EvalInput {
+                q: &q[..n],
+                qd: &qd[..n],
+                u: &u[..n],
+                drop_quadratic,
+                spin_momentum: &self.spin_momentum,
+                world_from_base: &r,
+                base_rate: &w,
+                gravity: g,
+            };
+            let mut out = EvalOutput {
+                m: &mut m[..n * n],
+                k: &mut k[..n * n],
+                c: &mut c[..n],
+                energies: [0.0; 3],
+            };
+            evaluate_any(chain, &inp, &mut out);
+            let e = out.energies;
+            (m, k, c, e)
+        };
+        let (m, k, c, [t2, t0, v]) = eval(&self.chain);
+        let only = |keep: fn(&Force) -> bool| Chain {
+            forces: self
+                .chain
+                .forces
+                .iter()
+                .filter(|f| keep(f))
+                .cloned()
+                .collect(),
+            ..self.chain.clone()
+        };
+        let (_, k_ns, c_ns, _) = eval(&only(|f| !matches!(f, Force::Servo { .. })));
+        let (_, k_c, c_c, _) = eval(&only(|f| matches!(f, Force::Spring { .. })));
+        let mut e = Energetics {
+            energy_j: t2 - t0 + v,
+            kinetic_j: t2,
+            frame_kinetic_j: t0,
+            potential_j: v,
+            ..Default::default()
+        };
+        for i in 0..n {
+            let (mut kq, mut kq_ns, mut kq_c, mut mq) = (0.0, 0.0, 0.0, 0.0);
+            for j in 0..n {
+                kq += k[i * n + j] * qd[j];
+                kq_ns += k_ns[i * n + j] * qd[j];
+                kq_c += k_c[i * n + j] * qd[j];
+                mq += m[i * n + j] * qdd[j];
+            }
+            if self.design.coordinates[i].servo.is_some() {
+                // An ideal servo: the torque is whatever its equation lacks.
+                e.servo_power_w += (mq - c[i] - kq) * qd[i];
+            }
+            // A finite-gain servo's torque is in the forces.
+            e.servo_power_w += (c[i] - c_ns[i] + kq - kq_ns) * qd[i];
+            e.damper_power_w += (kq_ns - kq_c) * qd[i];
+            e.applied_power_w += (c_ns[i] - c_c[i]) * qd[i];
+        }
+        Some(e)
     }
 
     /// Index (full) of the coordinate with a role.

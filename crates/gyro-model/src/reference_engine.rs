@@ -104,11 +104,12 @@ pub struct EvalInput<'a, T: Real> {
     pub gravity: [f64; 3],
 }
 
-/// Outputs: M (n×n, row-major), K (n×n), c (n).
+/// Outputs: M (n×n, row-major), K (n×n), c (n), and the energies [T₂ (at `u`), T₀, V], J.
 pub struct EvalOutput<'a, T: Real> {
     pub m: &'a mut [T],
     pub k: &'a mut [T],
     pub c: &'a mut [T],
+    pub energies: [T; 3],
 }
 
 #[derive(Clone, Copy)]
@@ -256,6 +257,7 @@ pub fn evaluate<T: Real, const N: usize>(
     }
     generalised_forces(chain, inp.q, &q, &kin, out.k, &mut v, &mut qf);
 
+    out.energies = [t2.v, t0.v, v.v];
     for i in 0..n {
         out.c[i] = qf[i] - p2[i].d[n] - b[i].d[n] + t2.d[i] + t0.d[i] - v.d[i];
         for k in 0..n {
@@ -325,6 +327,22 @@ fn generalised_forces<T: Real, const N: usize>(
                 coordinate, torque, ..
             } => {
                 qf[*coordinate] += torque.eval(&q[..n]).v;
+            }
+            Force::Servo {
+                coordinate,
+                relation,
+                stiffness,
+                damping,
+                ..
+            } => {
+                let i = *coordinate;
+                qf[i] -= (q_real[i] - relation.eval(q_real)) * *stiffness;
+                let mut g = [T::zero(); N];
+                relation.add_gradient(q_real, &mut g[..n]);
+                g[i] -= T::one();
+                for k in 0..n {
+                    k_out[i * n + k] += g[k] * *damping;
+                }
             }
         }
     }

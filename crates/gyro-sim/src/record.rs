@@ -9,7 +9,7 @@ use crate::scene::Scene;
 use crate::solvers::StopReason;
 use gyro_mcap::contract::{
     BodyShape, attachments, bodies_record, compass_state, design_constants_record, design_record,
-    events, result_record, run_record, scene_record, ship_state, solver_stats, status, tf,
+    energy, events, result_record, run_record, scene_record, ship_state, solver_stats, status, tf,
 };
 use gyro_mcap::{ChannelId, Pose, RecordingError, RecordingWriter, Value, WriterOptions};
 use gyro_model::constants::{EARTH_RADIUS_M, schuler_period_s};
@@ -148,10 +148,16 @@ struct Channels {
     events: ChannelId,
     solver_stats: ChannelId,
     tf: ChannelId,
+    /// `/compass/energy`, when the scene asks for it.
+    energy: Option<ChannelId>,
 }
 
 impl Channels {
-    fn add(w: &mut RecordingWriter, coordinates: &[String]) -> Result<Channels, RecordingError> {
+    fn add(
+        w: &mut RecordingWriter,
+        coordinates: &[String],
+        record_energy: bool,
+    ) -> Result<Channels, RecordingError> {
         Ok(Channels {
             compass: w
                 .add_record_channel(compass_state::TOPIC, &compass_state::schema(coordinates))?,
@@ -159,6 +165,11 @@ impl Channels {
             events: w.add_record_channel(events::TOPIC, &events::schema())?,
             solver_stats: w.add_record_channel(solver_stats::TOPIC, &solver_stats::schema())?,
             tf: w.add_pose_channel(tf::TOPIC)?,
+            energy: if record_energy {
+                Some(w.add_record_channel(energy::TOPIC, &energy::schema())?)
+            } else {
+                None
+            },
         })
     }
 }
@@ -257,7 +268,8 @@ impl<'s, 'p> Recorder<'s, 'p> {
             .iter()
             .map(|c| c.name.clone())
             .collect();
-        let channels = Channels::add(&mut writer, &coordinates).map_err(rec_err)?;
+        let channels =
+            Channels::add(&mut writer, &coordinates, scene.record_energy).map_err(rec_err)?;
         write_static_metadata(&mut writer, sim, scene, &coordinates, rhs_cost_ns)
             .map_err(rec_err)?;
         Ok(Recorder {
@@ -322,6 +334,24 @@ impl<'s, 'p> Recorder<'s, 'p> {
         c[compass_state::LEADING_FIELDS + n..].copy_from_slice(&r.qd);
         self.writer
             .write_f64_record(self.channels.compass, ns(t), &self.compass_values)?;
+        if let Some(ch) = self.channels.energy {
+            // A singular state (never seen in a run that got here) records NaN, not a gap.
+            let e = model.energetics(t, x).unwrap_or(gyro_model::Energetics {
+                energy_j: f64::NAN,
+                ..Default::default()
+            });
+            let values = [
+                t,
+                e.energy_j,
+                e.kinetic_j,
+                e.frame_kinetic_j,
+                e.potential_j,
+                e.servo_power_w,
+                e.damper_power_w,
+                e.applied_power_w,
+            ];
+            self.writer.write_f64_record(ch, ns(t), &values)?;
+        }
         let k = model.motion.kinematics(t);
         let longitude = self.longitude.advance(t, &k);
         let g = model.apparent_gravity(t);

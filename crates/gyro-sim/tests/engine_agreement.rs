@@ -245,9 +245,21 @@ axis = [1.0, 0.0, 0.0]
 
 #[test]
 fn body_axes_engine_matches_the_reference_on_a_chain_that_uses_every_path() {
-    let design = Design::from_toml("odd-chain.toml", ODD_DESIGN, &[]).expect("design");
+    let ideal = Design::from_toml("odd-chain.toml", ODD_DESIGN, &[]).expect("design");
+    // The same chain with its servo as a finite-gain motor (a torque on the follower only).
+    let pd = ideal.with_pd_servos(0.8, 0.05);
     let mut rng = Lcg(11);
-    for fidelity in [Fidelity::Full, Fidelity::Gyroscopic] {
+    for (design, fidelity) in [
+        (&ideal, Fidelity::Full),
+        (&ideal, Fidelity::Gyroscopic),
+        (&pd, Fidelity::Full),
+        (&pd, Fidelity::Gyroscopic),
+    ] {
+        let servo = if design.forces.len() > ideal.forces.len() {
+            "pd servo"
+        } else {
+            "ideal servo"
+        };
         let model = CompiledModel::compile(
             design.clone(),
             Moored {
@@ -263,7 +275,10 @@ fn body_axes_engine_matches_the_reference_on_a_chain_that_uses_every_path() {
         )
         .expect("compiles");
         let (e_rhs, e_jac) = compare(
-            &format!("odd-chain/{fidelity} (fidelity used: {})", model.fidelity),
+            &format!(
+                "odd-chain/{servo}/{fidelity} (fidelity used: {})",
+                model.fidelity
+            ),
             &model,
             &mut rng,
             0.5,
@@ -271,11 +286,11 @@ fn body_axes_engine_matches_the_reference_on_a_chain_that_uses_every_path() {
         );
         assert!(
             e_rhs < 1e-12,
-            "odd chain {fidelity}: rhs differs by {e_rhs:e}"
+            "odd chain {servo} {fidelity}: rhs differs by {e_rhs:e}"
         );
         assert!(
             e_jac < 1e-10,
-            "odd chain {fidelity}: Jacobian differs by {e_jac:e}"
+            "odd chain {servo} {fidelity}: Jacobian differs by {e_jac:e}"
         );
     }
 }

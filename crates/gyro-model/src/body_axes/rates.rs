@@ -189,6 +189,24 @@ fn coordinate_forces<T: Real, const N: usize>(
             } => {
                 qf[*coordinate] += torque.eval(q_real);
             }
+            Force::Servo {
+                coordinate,
+                relation,
+                stiffness,
+                damping: c,
+                ..
+            } => {
+                let i = *coordinate;
+                let mut g = [T::zero(); N];
+                relation.add_gradient(q_real, &mut g[..n]);
+                g[i] -= T::one();
+                let mut rate = T::zero();
+                for k in 0..n {
+                    rate += g[k] * u[k];
+                }
+                qf[i] -= (q_real[i] - relation.eval(q_real)) * *stiffness;
+                damping[i] += rate * *c;
+            }
             Force::BodyForce { .. } => {}
         }
     }

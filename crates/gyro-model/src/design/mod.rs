@@ -206,6 +206,17 @@ pub enum Force {
         coordinate: usize,
         torque: QuadExpr,
     },
+    /// A finite-gain (PD) servo: its motor turns `coordinate` toward the linear `relation` with
+    /// the torque −k(q − r(q)) − c(q̇ − ṙ), reacting on the carrier, not on the driver (so it is
+    /// a torque on this coordinate's equation only). [`Design::with_pd_servos`] makes these from
+    /// a design's ideal servos.
+    Servo {
+        name: String,
+        coordinate: usize,
+        relation: QuadExpr,
+        stiffness: f64,
+        damping: f64,
+    },
 }
 
 impl Force {
@@ -214,7 +225,8 @@ impl Force {
             Force::Damper { name, .. }
             | Force::Spring { name, .. }
             | Force::BodyForce { name, .. }
-            | Force::Generalized { name, .. } => name,
+            | Force::Generalized { name, .. }
+            | Force::Servo { name, .. } => name,
         }
     }
     /// Dampers dissipate; the others are potential or circulatory. Used by the effect list.
@@ -289,6 +301,25 @@ impl Design {
     /// Total mass of the moving element, kg.
     pub fn total_mass_kg(&self) -> f64 {
         self.bodies.iter().map(|b| b.mass_kg).sum()
+    }
+    /// The design with every ideal servo replaced by a finite-gain one: the driven coordinate
+    /// becomes free, and a [`Force::Servo`] of stiffness `k` (N·m/rad) and damping `c`
+    /// (N·m·s/rad) turns it toward its relation. As k grows the motion tends to the ideal
+    /// servo's, with a mode of frequency ≈ √(k/I) the integrator must carry.
+    pub fn with_pd_servos(&self, stiffness: f64, damping: f64) -> Design {
+        let mut d = self.clone();
+        for (i, c) in d.coordinates.iter_mut().enumerate() {
+            if let Some(relation) = c.servo.take() {
+                d.forces.push(Force::Servo {
+                    name: format!("servo_{}", c.name),
+                    coordinate: i,
+                    relation,
+                    stiffness,
+                    damping,
+                });
+            }
+        }
+        d
     }
     /// Named parameter (0 if absent).
     pub fn parameter(&self, name: &str) -> Option<f64> {

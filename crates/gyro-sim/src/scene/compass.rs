@@ -30,6 +30,20 @@ pub(super) struct CompassFile {
     /// Compass pivot relative to the ship's roll centre: forward, port, up (m).
     #[serde(default)]
     pub(super) pivot_m: [f64; 3],
+    /// How the design's servos are built: `{ kind = "ideal" }` (the relation holds exactly, the
+    /// default) or `{ kind = "pd", stiffness_n_m_per_rad, damping_n_m_s_per_rad }`.
+    #[serde(default)]
+    servo: Option<ServoFile>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+enum ServoFile {
+    Ideal,
+    Pd {
+        stiffness_n_m_per_rad: f64,
+        damping_n_m_s_per_rad: f64,
+    },
 }
 
 fn yes() -> bool {
@@ -148,6 +162,72 @@ pub(super) fn offsets(
 }
 
 /// `start_rates`: `slow` (true) or `rest` (false).
+/// The design with its servos as the scene asks: ideal (unchanged) or finite-gain PD motors.
+pub(super) fn servo(
+    c: &CompassFile,
+    design: Design,
+    src: &SourceText,
+) -> Result<Design, InputError> {
+    let Some(ServoFile::Pd {
+        stiffness_n_m_per_rad: k,
+        damping_n_m_s_per_rad: d,
+    }) = c.servo
+    else {
+        return Ok(design);
+    };
+    let err =
+        |key: &str, m: String| src.err(Some("servo"), key, &format!("compass.servo.{key}"), m);
+    if !(k.is_finite() && k > 0.0) {
+        return Err(err(
+            "stiffness_n_m_per_rad",
+            format!("{k} is out of range (allowed: > 0)"),
+        ));
+    }
+    if !(d.is_finite() && d >= 0.0) {
+        return Err(err(
+            "damping_n_m_s_per_rad",
+            format!("{d} is out of range (allowed: ≥ 0)"),
+        ));
+    }
+    if design.coordinates.iter().all(|c| c.servo.is_none()) {
+        return Err(src.err(
+            Some("servo"),
+            "kind",
+            "compass.servo.kind",
+            format!("design `{}` has no servo-driven coordinate", design.name),
+        ));
+    }
+    Ok(design.with_pd_servos(k, d))
+}
+
+/// A finite-gain servo's follower starts where its relation puts it: the start offsets of its
+/// drivers, carried through the (linear) relation, as an ideal servo would place it.
+pub(super) fn follow_offsets(design: &Design, offsets: &mut Vec<(usize, f64)>) {
+    for f in &design.forces {
+        if let gyro_model::Force::Servo {
+            coordinate,
+            relation,
+            ..
+        } = f
+        {
+            let carried: f64 = relation
+                .linear
+                .iter()
+                .map(|&(j, a)| {
+                    a * offsets
+                        .iter()
+                        .filter(|(i, _)| *i == j)
+                        .map(|(_, o)| o)
+                        .sum::<f64>()
+                })
+                .sum();
+            if carried != 0.0 {
+                offsets.push((*coordinate, carried));
+            }
+        }
+    }
+}
+
 pub(super) fn slow_start(c: &CompassFile, src: &SourceText) -> Result<bool, InputError> {
     match c.start_rates.as_str() {
         "slow" => Ok(true),

@@ -82,6 +82,8 @@ pub struct Scene {
     pub initial: InitialCondition,
     pub pivot_m: [f64; 3],
     pub pose_rate_hz: f64,
+    /// Whether the run records `/compass/energy`.
+    pub record_energy: bool,
     /// The scene file's text (recorded with every run).
     pub source_text: String,
     pub source_path: String,
@@ -133,14 +135,16 @@ impl Scene {
         let mut effects = simulation::effects(sim, &program, force_all, &src)?;
         let (fidelity, method, tolerances) = simulation::solver(sim, ov, &src)?;
         let c = &f.compass;
-        let loaded = compass::design(c, ov.design.as_ref(), dir, f.start.latitude_deg)?;
+        let mut loaded = compass::design(c, ov.design.as_ref(), dir, f.start.latitude_deg)?;
+        loaded.design = compass::servo(c, loaded.design, &src)?;
         // Spin-motor dynamics: compiled when the design has a motor and the scene does not
         // disable it (with `effects = "all"` it is asked for; a motorless design compiles none).
         if !force_all {
             effects.spin_motor = compass::has_motor(&loaded.design)
                 && !sim.disable_effects.iter().any(|e| e == "spin_motor");
         }
-        let offsets = compass::offsets(c, &loaded.design, &src)?;
+        let mut offsets = compass::offsets(c, &loaded.design, &src)?;
+        compass::follow_offsets(&loaded.design, &mut offsets);
         let pose_rate = simulation::pose_rate_hz(sim, rate, &src)?;
         let initial = InitialCondition {
             from_equilibrium: c.start_from_equilibrium,
@@ -166,6 +170,7 @@ impl Scene {
             initial,
             pivot_m: c.pivot_m,
             pose_rate_hz: pose_rate,
+            record_energy: sim.record_energy,
             source_text: text.to_string(),
             source_path: file.to_string(),
         })

@@ -30,6 +30,10 @@ pub(super) struct SimulationFile {
     /// Pose messages at most this often (the state series keeps the full output rate).
     #[serde(default)]
     pose_rate_hz: Option<f64>,
+    /// Record `/compass/energy` (Jacobi's integral and the servo, damper and applied powers) at
+    /// every sample: three reference-engine passes per sample, so only when asked.
+    #[serde(default)]
+    pub(super) record_energy: bool,
 }
 
 impl Default for SimulationFile {
@@ -43,6 +47,7 @@ impl Default for SimulationFile {
             effects: default_effects(),
             disable_effects: Vec::new(),
             pose_rate_hz: None,
+            record_energy: false,
         }
     }
 }
