@@ -484,3 +484,115 @@ fn the_energy_balance_is_recorded_when_asked() {
         "absent unless asked"
     );
 }
+
+/// The mean reading over the last `hours_avg` of a rolling run on 045° at 50°N, minus the
+/// harbour reading there: the rolling error V₀. `overrides` are design parameters.
+fn rolling_error(overrides: &[(&str, f64)], heading_deg: f64) -> f64 {
+    let ov: Vec<String> = overrides
+        .iter()
+        .map(|(k, v)| format!("\"parameters.{k}\" = {v:?}"))
+        .collect();
+    let text = |sea: bool| {
+        format!(
+            r#"name = "t"
+duration_s = 14400.0
+output_rate_hz = 2.0
+[start]
+latitude_deg = 50.0
+heading_deg = {heading_deg}
+[compass]
+design = "sperry-1911"
+design_overrides = {{ {} }}
+pivot_m = [0.0, 0.0, 10.035]
+{}
+[simulation]
+fidelity = "gyroscopic"
+integrator = "dop853"
+rtol = 1e-7
+"#,
+            ov.join(", "),
+            if sea {
+                "[sea]\nroll_amplitude_deg = 4.0\nroll_period_s = 10.0"
+            } else {
+                ""
+            }
+        )
+    };
+    let harbour = scene_from(&text(false), &SceneOverrides::default());
+    let still = Simulation::new(&harbour).expect("compiles");
+    let at_rest = still
+        .model
+        .readout(0.0, &still.model.x_equilibrium)
+        .reading_error_rad;
+    let sc = scene_from(&text(true), &SceneOverrides::default());
+    let (sim, out, _) = run(&sc, Method::Dop853, tol(1e-7, 1e-10));
+    let last: Vec<f64> = out
+        .iter()
+        .filter(|(t, _)| *t >= 7200.0)
+        .map(|(t, x)| sim.model.readout(*t, x).reading_error_rad)
+        .collect();
+    last.iter().sum::<f64>() / last.len() as f64 - at_rest
+}
+
+/// Beghin (48): rolling on an intercardinal heading, the Sperry's mean error has the gyro-ballistic
+/// pendulum's term (Ql + ϖb)·Re H(is)·(J₀/g)² sinΔ cosΔ/(2τ), H(iσ) = (k + ik₁σ)/(k − Mσ² + ik₁σ),
+/// the Anschütz's error times Re H: at synchronism (gyro-ballistic period = roll period, 10 s) it
+/// is the whole error, within 20 %, "dépassant J₀/g"; at the design's 13.5 s it is a few times
+/// smaller (the text's "nettement insuffisante": not small either); on a cardinal heading the
+/// error vanishes. And the compensating weights (49): breaking A₁ + A₂ + 2ape/g = B₁ by δB₁ adds
+/// (48)'s first term −δB₁ s²(J₀/g)² sinΔ cosΔ/(2τ), within 20 %. Measured: 0.108 rad at
+/// synchronism against 0.118; 0.026 rad at 13.5 s; 0.002 rad on 000° (not in (48), which keeps
+/// second-order terms in sinΔ cosΔ only); the first term 2.03e-3 against 1.78e-3. Both signs come
+/// out opposite to the printed (48), consistently: this chain's azimuth is West-positive.
+#[test]
+fn rolling_error_follows_eq_48() {
+    let probe = scene_from(&harbour(50.0, "", 0.1), &SceneOverrides::default());
+    let th = theory(&probe.design, 50.0);
+    let s = TAU / 10.0;
+    let j0_g = s * s * 10.035 * 4f64.to_radians().sin() / STANDARD_GRAVITY_M_PER_S2;
+    let sd_cd = 0.5; // sin 45° cos 45°
+    let anschutz_type =
+        (th.bail_moment + th.pendulum_moment) * j0_g * j0_g * sd_cd / (2.0 * th.tau());
+    let re_h = |period: f64| {
+        let d = probe
+            .design
+            .parameter("gyro_ballistic_damping_ratio")
+            .expect("ζ");
+        let r = period / 10.0;
+        let (nr, ni) = (1.0, 2.0 * d * r);
+        let (dr, di) = (1.0 - r * r, 2.0 * d * r);
+        (nr * dr + ni * di) / (dr * dr + di * di)
+    };
+    let synchronous = rolling_error(&[("gyro_ballistic_period_s", 10.0)], 45.0);
+    let design = rolling_error(&[], 45.0);
+    let cardinal = rolling_error(&[], 0.0);
+    let b1 = probe
+        .design
+        .parameter("vertical_ring_inertia_y_kg_m2")
+        .expect("B₁");
+    let broken = rolling_error(&[("vertical_ring_inertia_y_kg_m2", b1 - 0.3)], 45.0);
+    let first_term = 0.3 * s * s * j0_g * j0_g * sd_cd / (2.0 * th.tau());
+    println!(
+        "Anschütz-type error {anschutz_type:.4} rad; synchronous (Re H = {:.3}): {synchronous:.4} rad; design 13.5 s (Re H = {:.3}): {design:.4} rad; cardinal {cardinal:.2e} rad; (49) broken by −0.3 kg·m²: {:.3e} rad more, first term {first_term:.3e}",
+        re_h(10.0),
+        re_h(13.5),
+        broken - design
+    );
+    let expected = anschutz_type * re_h(10.0);
+    assert!(
+        (synchronous.abs() / expected.abs() - 1.0).abs() < 0.2,
+        "synchronous {synchronous} vs {expected}"
+    );
+    assert!(design.abs() < synchronous.abs() / 3.0 && design.abs() > 0.05 * synchronous.abs());
+    assert!(cardinal.abs() < 0.1 * design.abs(), "cardinal {cardinal}");
+    assert!(
+        ((broken - design).abs() / first_term.abs() - 1.0).abs() < 0.2,
+        "first term {} vs {first_term}",
+        broken - design
+    );
+    // One sign convention between (48) and this chain, the same for both terms.
+    assert_eq!(
+        synchronous.signum() * expected.signum(),
+        (broken - design).signum() * first_term.signum()
+    );
+}
