@@ -230,3 +230,24 @@ fn bad_contact_and_servo_relations_are_refused() {
     let e = design_error(&text);
     assert!(e.message.contains("linear"), "{e}");
 }
+
+/// A spin reversal the design does not allow: the Anschütz with a negative spin (it would seek
+/// South) is refused at the rotor's line; Foucault's torus, reversible in Villarceau, is not.
+#[test]
+fn spin_reversal_is_refused_unless_the_design_allows_it() {
+    let text = design_text().replace(
+        r#"spin_rpm = "= spin_rpm", spin = "held""#,
+        r#"spin_rpm = "= -spin_rpm", spin = "held""#,
+    );
+    let e = design_error(&text);
+    assert!(e.message.contains("does not allow"), "{e}");
+    assert_eq!(e.key, "body.rotor.rotor.spin_rpm", "{e}");
+    assert_eq!(e.line, Some(line_of(&text, "= -spin_rpm")));
+    let foucault = std::fs::read_to_string(format!(
+        "{}/../../designs/foucault-gyroscope.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("design");
+    let reversed = foucault.replace("spin_rpm = 9000.0", "spin_rpm = -9000.0");
+    Design::from_toml("foucault.toml", &reversed, &[]).expect("reversible");
+}

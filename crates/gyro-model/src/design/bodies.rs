@@ -292,6 +292,17 @@ fn rotor(
             ),
         ));
     }
+    if r.spin_rpm < 0.0 && !r.reversible {
+        return Err(src.err(
+            a,
+            "spin_rpm",
+            path("rotor.spin_rpm"),
+            format!(
+                "{} reverses the spin, which this design does not allow (allowed: > 0, or set `reversible = true` on a rotor meant to run either way)",
+                r.spin_rpm
+            ),
+        ));
+    }
     let motor = match &r.motor {
         None => None,
         Some(m) => {

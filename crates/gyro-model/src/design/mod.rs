@@ -57,6 +57,10 @@ pub struct RotorSpec {
     /// A spin motor (`held` rotors only): the spin is then a state that relaxes to `spin_rpm`.
     #[serde(default)]
     pub motor: Option<MotorSpec>,
+    /// Whether the design may run with the spin reversed (a negative `spin_rpm`, e.g. from a
+    /// scene's override): a compass built for one sense seeks South with the other.
+    #[serde(default)]
+    pub reversible: bool,
 }
 
 /// The rotor's motor as a first-order lag: dΩ/dt = (Ω_rated − Ω)/τ (an induction motor whose
