@@ -485,7 +485,13 @@ impl<M: ShipMotion> CompiledModel<M> {
             {
                 x[col] = self.motion.kinematics(0.0f64).heading_rad;
             }
-            let q = self.equilibrium(&x[..ni])?;
+            // The equilibrium of the mean motion: without the sea, whose phase at t = 0 is no
+            // state to settle on (a ship-rooted small gyro would start deflected by the roll
+            // rate's gyroscopic torque, jω·Γ̇ ≈ 0.01 N·m: a radian on the Sperry's spring).
+            let sea = std::mem::replace(&mut self.effects.base.roll_pitch, false);
+            let q = self.equilibrium(&x[..ni]);
+            self.effects.base.roll_pitch = sea;
+            let q = q?;
             x[..ni].copy_from_slice(&q);
             self.update_free_rotors(&x);
         }
