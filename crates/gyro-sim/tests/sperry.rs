@@ -1,6 +1,7 @@
-//! Sperry 1911 simulated by the engine against Beghin's closed forms (ch. IV), computed from the
-//! design's own parameters: the harbour swing (period, decay, azimuth/tilt ratio, latitude
-//! error) and the ballistic deviation of a speed change, against the Anschütz 1906's.
+//! Sperry 1911 simulated by the engine against Beghin's closed forms (ch. I, IV), computed from
+//! the design's own parameters: the harbour swing (period, decay, azimuth/tilt ratio, latitude
+//! error), the ballistic deviation of a speed change against the Anschütz 1906's, the servo's
+//! work in the energy balance, the finite-gain servo's convergence, and the rolling error (48).
 
 use crate::support;
 use gyro_model::Design;
@@ -297,7 +298,7 @@ fn schuler_tuned_speed_change_lands_on_the_new_equilibrium() {
 }
 
 /// Beghin ch. I: the servo's work closes the energy balance. The Sperry in harbour at 35°N,
-/// released 2° off: the roller damps the swing, and Jacobi's integral h = T₂ − T₀ + V falls by
+/// released 2° off: the roller damps the swing, and Jacobi's integral h = T₂ − T₀ + V moves by
 /// exactly the work of the servo and the dampers, ∫ (P_servo + P_dampers) dt (Simpson's rule on
 /// the samples), over 6 h in `gyroscopic` (whose Lagrangian drops the precessional inertias) and
 /// 10 min in `full`. The energy scale is that of the terms h sums (the weight of 45 kg hung below
@@ -485,8 +486,9 @@ fn the_energy_balance_is_recorded_when_asked() {
     );
 }
 
-/// The mean reading over the last `hours_avg` of a rolling run on 045° at 50°N, minus the
-/// harbour reading there: the rolling error V₀. `overrides` are design parameters.
+/// The mean reading over the last 2 h of a 4-h rolling run at 50°N (10-s roll, 0.70 m at the
+/// compass) on `heading_deg`, minus the harbour reading there: the rolling error V₀.
+/// `overrides` are design parameters.
 fn rolling_error(overrides: &[(&str, f64)], heading_deg: f64) -> f64 {
     let ov: Vec<String> = overrides
         .iter()
