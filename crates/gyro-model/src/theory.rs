@@ -234,6 +234,23 @@ pub struct Sperry1911 {
 }
 
 impl Sperry1911 {
+    /// The constants from a Sperry design's named parameters (`designs/sperry-1911.toml`), at
+    /// `latitude_rad`; `None` if one is missing.
+    pub fn from_design(d: &crate::Design, latitude_rad: f64) -> Option<Sperry1911> {
+        let p = |k: &str| d.parameter(k);
+        Some(Sperry1911 {
+            spin_momentum: p("spin_momentum_n_m_s")?,
+            bail_moment: p("bail_moment_n_m")?,
+            pendulum_moment: p("pendulum_moment_n_m")?,
+            overload_moment: p("overload_moment_n_m")?,
+            roller_offset: p("roller_offset_rad")?,
+            small_spin_momentum: p("small_spin_momentum_n_m_s")?,
+            spring: p("small_gyro_spring_n_m_per_rad")?,
+            damper: p("small_gyro_damper_n_m_s_per_rad")?,
+            dial_eta: p("dial_eta_rad")?,
+            latitude_rad,
+        })
+    }
     /// τ = IΩε cos L.
     pub fn tau(&self) -> f64 {
         self.spin_momentum * EARTH_RATE_RAD_PER_S * self.latitude_rad.cos()

@@ -15,19 +15,7 @@ use std::f64::consts::TAU;
 use support::*;
 
 fn theory(d: &Design, lat_deg: f64) -> Sperry1911 {
-    let p = |k: &str| d.parameter(k).unwrap_or_else(|| panic!("parameter {k}"));
-    Sperry1911 {
-        spin_momentum: p("spin_momentum_n_m_s"),
-        bail_moment: p("bail_moment_n_m"),
-        pendulum_moment: p("pendulum_moment_n_m"),
-        overload_moment: p("overload_moment_n_m"),
-        roller_offset: p("roller_offset_rad"),
-        small_spin_momentum: p("small_spin_momentum_n_m_s"),
-        spring: p("small_gyro_spring_n_m_per_rad"),
-        damper: p("small_gyro_damper_n_m_s_per_rad"),
-        dial_eta: p("dial_eta_rad"),
-        latitude_rad: lat_deg.to_radians(),
-    }
+    Sperry1911::from_design(d, lat_deg.to_radians()).expect("the Sperry's parameters")
 }
 
 /// A harbour scene for the Sperry at `lat`, `hours` long, with extra `[compass]` lines.
