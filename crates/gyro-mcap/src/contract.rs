@@ -35,17 +35,35 @@ pub mod compass_state {
 
     /// The field of a design coordinate's angle: `<coordinate>_rad`.
     pub fn angle_field(coordinate: &str) -> String {
-        format!("{coordinate}_rad")
+        coordinate_field(coordinate, "rad")
     }
 
     /// The field of a design coordinate's rate: `<coordinate>_rate_rad_per_s`.
     pub fn rate_field(coordinate: &str) -> String {
-        format!("{coordinate}_rate_rad_per_s")
+        coordinate_rate_field(coordinate, "rad")
     }
 
-    /// The schema for a design with these coordinates (in order): the leading fields, every
-    /// coordinate's angle, then every coordinate's rate.
+    /// The field of a design coordinate in its unit (`rad` for a hinge angle, `m` for a pots'
+    /// level): `<coordinate>_<unit>`.
+    pub fn coordinate_field(coordinate: &str, unit: &str) -> String {
+        format!("{coordinate}_{unit}")
+    }
+
+    /// The field of a design coordinate's rate: `<coordinate>_rate_<unit>_per_s`.
+    pub fn coordinate_rate_field(coordinate: &str, unit: &str) -> String {
+        format!("{coordinate}_rate_{unit}_per_s")
+    }
+
+    /// The schema for a design whose coordinates are all angles (in order).
     pub fn schema<S: AsRef<str>>(coordinates: &[S]) -> RecordSchema {
+        let with_units: Vec<(&str, &str)> =
+            coordinates.iter().map(|c| (c.as_ref(), "rad")).collect();
+        schema_with_units(&with_units)
+    }
+
+    /// The schema for a design with these (coordinate, unit) pairs in order: the leading
+    /// fields, every coordinate, then every coordinate's rate.
+    pub fn schema_with_units<S: AsRef<str>>(coordinates: &[(S, &str)]) -> RecordSchema {
         let mut fields = vec![
             FieldSpec::f64(TIME_S, "s"),
             FieldSpec::f64(READING_ERROR_RAD, "rad"),
@@ -53,11 +71,14 @@ pub mod compass_state {
             FieldSpec::f64(TRUE_HEADING_RAD, "rad"),
             FieldSpec::f64(TILT_RAD, "rad"),
         ];
-        for c in coordinates {
-            fields.push(FieldSpec::f64(&angle_field(c.as_ref()), "rad"));
+        for (c, unit) in coordinates {
+            fields.push(FieldSpec::f64(&coordinate_field(c.as_ref(), unit), unit));
         }
-        for c in coordinates {
-            fields.push(FieldSpec::f64(&rate_field(c.as_ref()), "rad/s"));
+        for (c, unit) in coordinates {
+            fields.push(FieldSpec::f64(
+                &coordinate_rate_field(c.as_ref(), unit),
+                &format!("{unit}/s"),
+            ));
         }
         RecordSchema {
             full_name: SCHEMA.into(),
@@ -306,10 +327,18 @@ pub mod bodies_record {
     /// A rotor's spin axis in the body frame, `[x, y, z]`.
     pub const SPIN_AXIS: &str = "spin_axis";
     pub const SPIN_RAD_PER_S: &str = "spin_rad_per_s";
+    /// Communicating pots the body carries: `<body>.pots.<name>`, a
+    /// [`super::PotsDrawing`]'s [`super::PotsDrawing::metadata_value`].
+    pub const POTS: &str = "pots";
 
     /// The key of one body's entry: `<body>.<what>`.
     pub fn key(body: &str, what: &str) -> String {
         format!("{body}.{what}")
+    }
+
+    /// The key of the pots `name` carried by `body`: `<body>.pots.<name>`.
+    pub fn pots_key(body: &str, name: &str) -> String {
+        format!("{body}.{POTS}.{name}")
     }
 }
 
@@ -418,6 +447,40 @@ impl BodyShape {
         }
         text.push_str(" }");
         text
+    }
+}
+
+/// Communicating pots as the viewer draws them (carrier's frame, metres): two columns of liquid
+/// standing `rest_level_m ± level` on their bases along `axis`, the level read from the compass
+/// state's field `level_field`, and the tube between them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PotsDrawing {
+    pub level_field: String,
+    pub first_base_m: [f64; 3],
+    pub second_base_m: [f64; 3],
+    pub axis: [f64; 3],
+    /// Radius of a pot of the open section.
+    pub radius_m: f64,
+    pub rest_level_m: f64,
+    /// From the second pot's base to the first's, both included.
+    pub tube_path_m: Vec<[f64; 3]>,
+}
+
+impl PotsDrawing {
+    /// A TOML inline table with the struct's field names as keys.
+    pub fn metadata_value(&self) -> String {
+        let vector = |v: &[f64; 3]| format!("[{}, {}, {}]", v[0], v[1], v[2]);
+        let path: Vec<String> = self.tube_path_m.iter().map(vector).collect();
+        format!(
+            "{{ level_field = \"{}\", first_base_m = {}, second_base_m = {}, axis = {}, radius_m = {}, rest_level_m = {}, tube_path_m = [{}] }}",
+            self.level_field,
+            vector(&self.first_base_m),
+            vector(&self.second_base_m),
+            vector(&self.axis),
+            self.radius_m,
+            self.rest_level_m,
+            path.join(", ")
+        )
     }
 }
 

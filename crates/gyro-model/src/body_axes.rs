@@ -27,7 +27,7 @@
 use crate::design::{Design, Force};
 use crate::dual::{Jet, M3, Real, V3};
 use crate::expr::QuadExpr;
-use crate::reference_engine::EvalInput;
+use crate::reference_engine::{Chain, EvalInput, EvalOutput, evaluate_pots_any};
 
 mod rates;
 mod walk;
@@ -129,6 +129,9 @@ pub struct BodyAxesChain {
     frames: Vec<Frame>,
     /// Dampers, springs and generalised forces (coordinate-space elements).
     forces: Vec<Force>,
+    /// The world-axes chain down to the carriers of communicating pots, whose share of the
+    /// equations the reference engine forms (`pots_terms`); `None` without pots.
+    pots: Option<Chain>,
 }
 
 type Mat = [[f64; 3]; 3];
@@ -288,6 +291,7 @@ impl BodyAxesChain {
             n: d.coordinates.len(),
             frames,
             forces,
+            pots: (!d.pots.is_empty()).then(|| Chain::from_design(d, |_| false)),
         }
     }
 }
@@ -547,6 +551,41 @@ pub fn evaluate<T: Real, const N: usize>(
             k_out[i][k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
         }
     }
+    if let Some(terms) = pots_terms(kin, inp) {
+        for i in 0..n {
+            c_out[i] += terms.c[i];
+            for k in 0..n {
+                m_out[i][k] += terms.m[i * n + k];
+                k_out[i][k] += terms.k[i * n + k];
+            }
+        }
+    }
+}
+
+/// M, K and c of communicating pots (row-major n × n), from the reference engine: the pots'
+/// Lagrangian reads only their carriers' kinematics, which a short world-axes walk gives.
+pub(super) struct PotsTerms<T> {
+    m: [T; 256],
+    k: [T; 256],
+    c: [T; 16],
+}
+
+pub(super) fn pots_terms<T: Real>(kin: &BodyAxesChain, inp: &EvalInput<T>) -> Option<PotsTerms<T>> {
+    let chain = kin.pots.as_ref()?;
+    let n = kin.n;
+    let mut t = PotsTerms {
+        m: [T::zero(); 256],
+        k: [T::zero(); 256],
+        c: [T::zero(); 16],
+    };
+    let mut out = EvalOutput {
+        m: &mut t.m[..n * n],
+        k: &mut t.k[..n * n],
+        c: &mut t.c[..n],
+        energies: [T::zero(); 3],
+    };
+    evaluate_pots_any(chain, inp, &mut out);
+    Some(t)
 }
 
 /// The coordinate-space force elements: dampers into K (−c ∇e ∇eᵀ), springs into V, and

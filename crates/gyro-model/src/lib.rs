@@ -33,7 +33,7 @@ mod model;
 mod reference_engine;
 pub mod theory;
 
-pub use design::{CoordinateRole, Design, Force, Root, Shape, SpinMode};
+pub use design::{CoordinateRole, CoordinateUnit, Design, Force, Pots, Root, Shape, SpinMode};
 pub use dual::{Jet, Real};
 pub use earth::{BaseEffects, Moored, ShipKinematics, ShipMotion};
 pub use error::InputError;

@@ -24,7 +24,7 @@
 //! This world-axes form is the reference: the model evaluates the same equations in body axes
 //! (`body_axes`), about 4 times cheaper, and the tests hold the two together to round-off.
 
-use crate::design::{Body, Design, Force, Hinge, Root};
+use crate::design::{Body, Design, Force, Hinge, Pots, Root};
 use crate::dual::{Jet, M3, Real, V3};
 
 /// The immutable, index-based form of a design's chain that the engine walks.
@@ -33,6 +33,8 @@ pub struct Chain {
     pub n: usize,
     pub bodies: Vec<ChainBody>,
     pub forces: Vec<Force>,
+    /// Communicating pots (their carriers are bodies of the chain).
+    pub pots: Vec<Pots>,
     pub ship_root: bool,
 }
 
@@ -82,6 +84,7 @@ impl Chain {
                 .filter(|f| include_force(f))
                 .cloned()
                 .collect(),
+            pots: d.pots.clone(),
             ship_root: d.root == Root::Ship,
         }
     }
@@ -155,34 +158,7 @@ pub fn evaluate<T: Real, const N: usize>(
     let mut kin: Vec<BodyKin<S<T, N>, N>> = Vec::with_capacity(chain.bodies.len());
     let vz = V3::<S<T, N>>::zero();
     for (bi, body) in chain.bodies.iter().enumerate() {
-        // Start from the parent's kinematics (one copy) and extend it in place.
-        let mut k = match body.parent {
-            Some(pi) => kin[pi],
-            None => BodyKin {
-                r: base_r,
-                p: vz,
-                jw: [vz; N],
-                jm: [vz; N],
-            },
-        };
-        k.p = k.p.add(&k.r.mul_v(&V3::from_f64(body.origin)));
-        if let Some(jr) = &body.joint_rotation {
-            k.r = k.r.mul_m(&M3::from_f64(*jr));
-        }
-        if let Some(h) = &body.hinge {
-            let phi = h.angle.eval(&q[..n]);
-            let mut grad = [zero; N];
-            h.angle.add_gradient(&q[..n], &mut grad[..n]);
-            let a = k.r.col(h.axis);
-            let axp = a.cross(&k.p);
-            for i in 0..n {
-                if grad[i] != zero {
-                    k.jw[i] = k.jw[i].add(&a.scale(grad[i]));
-                    k.jm[i] = k.jm[i].add(&axp.scale(grad[i]));
-                }
-            }
-            k.r = k.r.rotate_about_axis(h.axis, phi);
-        }
+        let k = body_kinematics(&kin, body, &q, n, &base_r);
         kin.push(k);
         let k = &kin[bi];
         let (r_b, p_b, jw, jm) = (&k.r, &k.p, &k.jw, &k.jm);
@@ -250,6 +226,18 @@ pub fn evaluate<T: Real, const N: usize>(
         }
     }
 
+    for pots in &chain.pots {
+        let terms = pots::Terms {
+            p2: &mut p2,
+            b: &mut b,
+            t2: &mut t2,
+            t0: &mut t0,
+            v: &mut v,
+            m: &mut *out.m,
+        };
+        pots::add(pots, &kin[pots.body], &q, n, inp, &w0, terms);
+    }
+
     // Generalised forces.
     let mut qf = [T::zero(); N];
     for x in out.k.iter_mut() {
@@ -264,6 +252,49 @@ pub fn evaluate<T: Real, const N: usize>(
             out.k[i * n + k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
         }
     }
+}
+
+/// One body's rotation, joint position and velocity Jacobian columns, from its parent's (already
+/// in `kin`) through its joint and hinge.
+#[inline(always)]
+fn body_kinematics<T: Real, const N: usize>(
+    kin: &[BodyKin<Jet<T, N>, N>],
+    body: &ChainBody,
+    q: &[Jet<T, N>; N],
+    n: usize,
+    base_r: &M3<Jet<T, N>>,
+) -> BodyKin<Jet<T, N>, N> {
+    let zero = Jet::<T, N>::zero();
+    let vz = V3::<Jet<T, N>>::zero();
+    // Start from the parent's kinematics (one copy) and extend it.
+    let mut k = match body.parent {
+        Some(pi) => kin[pi],
+        None => BodyKin {
+            r: *base_r,
+            p: vz,
+            jw: [vz; N],
+            jm: [vz; N],
+        },
+    };
+    k.p = k.p.add(&k.r.mul_v(&V3::from_f64(body.origin)));
+    if let Some(jr) = &body.joint_rotation {
+        k.r = k.r.mul_m(&M3::from_f64(*jr));
+    }
+    if let Some(h) = &body.hinge {
+        let phi = h.angle.eval(&q[..n]);
+        let mut grad = [zero; N];
+        h.angle.add_gradient(&q[..n], &mut grad[..n]);
+        let a = k.r.col(h.axis);
+        let axp = a.cross(&k.p);
+        for i in 0..n {
+            if grad[i] != zero {
+                k.jw[i] = k.jw[i].add(&a.scale(grad[i]));
+                k.jm[i] = k.jm[i].add(&axp.scale(grad[i]));
+            }
+        }
+        k.r = k.r.rotate_about_axis(h.axis, phi);
+    }
+    k
 }
 
 /// The force elements: dampers into K, springs into V, body forces (their moments about the
@@ -364,6 +395,24 @@ macro_rules! dispatch_n {
             _ => $f::<_, 16>($($arg),*),
         }
     };
+}
+
+mod pots;
+
+/// The communicating pots' share of M, K, c and the energies, added into `out` (for the
+/// body-axes engine, which walks the rest of the chain its own way). Nothing without pots.
+pub fn evaluate_pots_any<T: Real>(chain: &Chain, inp: &EvalInput<T>, out: &mut EvalOutput<T>) {
+    if !chain.pots.is_empty() {
+        dispatch_n!(chain.n, evaluate_pots, chain, inp, out)
+    }
+}
+
+fn evaluate_pots<T: Real, const N: usize>(
+    chain: &Chain,
+    inp: &EvalInput<T>,
+    out: &mut EvalOutput<T>,
+) {
+    pots::evaluate::<T, N>(chain, inp, out)
 }
 
 /// Largest chain the engine compiles for.

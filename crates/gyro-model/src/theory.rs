@@ -305,6 +305,128 @@ impl Sperry1911 {
     }
 }
 
+/// The Slough (Beghin §50–53): the Sperry with its bail replaced by communicating mercury pots
+/// and the spin reversed. K = 2ϖω₀h² − Ql is the liquid counterweight's moment.
+#[derive(Clone, Debug)]
+pub struct Slough {
+    /// Main spin momentum IΩ, N·m·s: negative (the spin is reversed).
+    pub spin_momentum: f64,
+    /// 2ϖω₀h², N·m: the moment of the liquid that flows.
+    pub liquid_moment: f64,
+    /// Ql: the pendulous moment (positive below the axis) of the pots' frame and the mercury
+    /// solidified at equal levels, about the frame's hinge, N·m.
+    pub solid_moment: f64,
+    /// ap, N·m.
+    pub overload_moment: f64,
+    /// ρ, rad.
+    pub roller_offset: f64,
+    /// η, rad.
+    pub dial_eta: f64,
+    /// h, m.
+    pub half_spacing: f64,
+    /// ℰ, kg; the level's stiffness 2ϖω₀, N/m; the flow's friction k, N·s/m.
+    pub flow_inertia: f64,
+    pub level_stiffness: f64,
+    pub friction: f64,
+    pub latitude_rad: f64,
+}
+
+impl Slough {
+    /// The constants of a design with one `[[pots]]` entry, its rotor body `rotor` and the
+    /// parameters `overload_moment_n_m`, `roller_offset_rad`, `dial_eta_rad`
+    /// (`designs/slough.toml`). K is computed from the pots' geometry and the carrier's mass,
+    /// not from the parameters that chose them. `None` if something is missing.
+    pub fn from_design(d: &crate::Design, latitude_rad: f64) -> Option<Slough> {
+        let g = STANDARD_GRAVITY_M_PER_S2;
+        let pots = d.pots.first()?;
+        let carrier = &d.bodies[pots.body];
+        let rotor_body = &d.bodies[d.body_index("rotor")?];
+        let rotor = rotor_body.rotor.as_ref()?;
+        let rho_w0 = pots.density_kg_per_m3 * pots.section_m2;
+        let c = pots.rest_level_m;
+        // The open columns at rest: mass ρω₀c each, centred c/2 along the axis above the base.
+        let columns_first_moment: f64 = pots
+            .bases_m
+            .iter()
+            .map(|b| rho_w0 * c * (b[2] + 0.5 * c * pots.axis[2]))
+            .sum();
+        let h = pots.half_spacing_m();
+        Some(Slough {
+            spin_momentum: rotor.polar_inertia_kg_m2 * rotor.spin_rad_per_s,
+            liquid_moment: 2.0 * rho_w0 * g * h * h,
+            solid_moment: -g * (carrier.mass_kg * carrier.cg_m[2] + columns_first_moment),
+            overload_moment: d.parameter("overload_moment_n_m")?,
+            roller_offset: d.parameter("roller_offset_rad")?,
+            dial_eta: d.parameter("dial_eta_rad")?,
+            half_spacing: h,
+            flow_inertia: pots.flow_inertia_kg(),
+            level_stiffness: pots.level_stiffness_n_per_m(g),
+            friction: pots.friction_n_s_per_m,
+            latitude_rad,
+        })
+    }
+    /// K = 2ϖω₀h² − Ql, N·m.
+    pub fn counterweight_moment(&self) -> f64 {
+        self.liquid_moment - self.solid_moment
+    }
+    /// τ = IΩε cos L (negative).
+    pub fn tau(&self) -> f64 {
+        self.spin_momentum * EARTH_RATE_RAD_PER_S * self.latitude_rad.cos()
+    }
+    /// The tilt's restoring moment with the Earth term restored: K − ap − τ. The text's (20)–(22)
+    /// write K − ap, dropping τ = IΩε cos L against ap; in the tilt equation (15) it stands
+    /// beside 𝒫, as (Ql + ϖb + τ) does in the Sperry's (§44). With the Slough's numbers |τ| is
+    /// a tenth of ap, so the stability boundary moves by a tenth.
+    pub fn restoring_moment(&self) -> f64 {
+        self.counterweight_moment() - self.overload_moment - self.tau()
+    }
+    /// Stable (eq. 21, τ restored) when K > ap + τ with Ω < 0.
+    pub fn is_stable(&self) -> bool {
+        self.spin_momentum < 0.0 && self.restoring_moment() > 0.0
+    }
+    /// The compass period of eq. (22), τ restored: 4π²/T² = ε cos L (K − ap − τ)/(−IΩ), s.
+    pub fn period(&self) -> f64 {
+        let w2 = EARTH_RATE_RAD_PER_S * self.latitude_rad.cos() * self.restoring_moment()
+            / (-self.spin_momentum);
+        TAU / w2.sqrt()
+    }
+    /// The damping factor of eq. (23), ρK/(−2IΩ), 1/s.
+    pub fn damping_factor(&self) -> f64 {
+        self.roller_offset * self.counterweight_moment() / (-2.0 * self.spin_momentum)
+    }
+    /// The roots of eq. (20), τ restored, I²Ω²r² − IΩρK r − τ(K − ap − τ) = 0: the compass pair.
+    pub fn compass_roots(&self) -> [(f64, f64); 2] {
+        let k = self.counterweight_moment();
+        let h = self.spin_momentum;
+        let c = [
+            -self.tau() * self.restoring_moment(),
+            -h * self.roller_offset * k,
+            h * h,
+        ];
+        let r = polynomial_roots(&c);
+        [r[0], r[1]]
+    }
+    /// The roots of the trinomial ℰr² + kr + 2ϖω₀: the mercury's own mode in its pots held.
+    pub fn mercury_roots(&self) -> [(f64, f64); 2] {
+        let r = polynomial_roots(&[self.level_stiffness, self.friction, self.flow_inertia]);
+        [r[0], r[1]]
+    }
+    /// The latitude error of eq. (18), ζ = −ρ tan L (the Sperry's), rad.
+    pub fn latitude_error(&self) -> f64 {
+        -self.roller_offset * self.latitude_rad.tan()
+    }
+    /// The level at equilibrium, u = hη (eq. 18), m.
+    pub fn equilibrium_level(&self) -> f64 {
+        self.half_spacing * self.dial_eta
+    }
+    /// The azimuth's step after a North speed change δv once the mercury has settled (eq. 30):
+    /// IΩδV = (𝒫 − 2ϖω₀h²)δv/g with 𝒫 = ap + Ql, rad.
+    pub fn speed_change_deviation(&self, delta_v_m_per_s: f64) -> f64 {
+        (self.overload_moment + self.solid_moment - self.liquid_moment) * delta_v_m_per_s
+            / (STANDARD_GRAVITY_M_PER_S2 * self.spin_momentum)
+    }
+}
+
 /// Roots of Σ cᵢ rⁱ (coefficients lowest first) as (re, im), by the companion matrix, then
 /// polished by complex Newton on the polynomial (so tiny roots next to huge ones keep their
 /// relative accuracy).

@@ -5,5 +5,6 @@
 mod anschutz_statics;
 mod linalg_stiff;
 mod servo_plate;
+mod slough_statics;
 mod sperry_statics;
 mod villarceau_equation;

@@ -15,7 +15,7 @@
 //! (duals over duals) goes through this walk too.
 
 use super::walk::{Carried, clear, cross_cg};
-use super::{BodyAxesChain, Frame, inertia_mul, re, scale};
+use super::{BodyAxesChain, Frame, inertia_mul, pots_terms, re, scale};
 use crate::design::Force;
 use crate::dual::{Jet, Real, V3};
 use crate::reference_engine::EvalInput;
@@ -138,6 +138,17 @@ pub fn evaluate_rates<T: Real, const N: usize>(
         r_out[i] = qf[i] - pt[i] + lagrangian.d[i] - p[i].d[0] + damping[i];
         for j in i + 1..n {
             m_out[i][j] = m_out[j][i];
+        }
+    }
+    // Communicating pots: their M, K, c from the reference engine, r = c + K q̇.
+    if let Some(terms) = pots_terms(kin, inp) {
+        for i in 0..n {
+            let mut r = terms.c[i];
+            for k in 0..n {
+                m_out[i][k] += terms.m[i * n + k];
+                r += terms.k[i * n + k] * u[k];
+            }
+            r_out[i] += r;
         }
     }
 }

@@ -52,6 +52,7 @@ pub(super) fn bodies(
     body: &[BodyFile],
     coordinates: &[Coordinate],
     coord_names: &[String],
+    pot_levels: &[usize],
     parameters: &BTreeMap<String, f64>,
     src: &SourceText,
 ) -> Result<Vec<Body>, InputError> {
@@ -77,7 +78,7 @@ pub(super) fn bodies(
     }
     // Every non-driven coordinate must move something, or its mass matrix row is empty.
     for (i, c) in coordinates.iter().enumerate() {
-        if c.servo.is_some() {
+        if c.servo.is_some() || pot_levels.contains(&i) {
             continue;
         }
         let used = bodies.iter().any(|b| {
@@ -90,7 +91,7 @@ pub(super) fn bodies(
                 Some(&format!("name = \"{}\"", c.name)),
                 "name",
                 format!("coordinate.{}", c.name),
-                "no hinge angle uses this coordinate".into(),
+                "no hinge angle uses this coordinate (and it is no pots' level)".into(),
             ));
         }
     }

@@ -1,6 +1,6 @@
 //! The `[parameters]` table's checks and the `[[coordinate]]` entries.
 
-use super::{Coordinate, CoordinateRole, SourceText};
+use super::{Coordinate, CoordinateRole, CoordinateUnit, SourceText};
 use crate::error::InputError;
 use crate::expr;
 use serde::Deserialize;
@@ -110,6 +110,7 @@ pub(super) fn coordinates(
             role,
             servo,
             precessional: c.precessional,
+            unit: CoordinateUnit::Radian,
         });
     }
     // A servo relation must read only non-driven coordinates (no chains of servos).

@@ -15,6 +15,7 @@ mod bodies;
 mod coordinates;
 mod document;
 mod forces;
+mod pots;
 mod reading;
 
 use crate::error::{InputError, locate};
@@ -23,6 +24,7 @@ use bodies::BodyFile;
 use coordinates::CoordinateFile;
 use document::{apply_override, resolve_expressions};
 use forces::ForceFile;
+use pots::PotsFile;
 use reading::ReadingFile;
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -115,6 +117,8 @@ struct DesignFile {
     body: Vec<BodyFile>,
     #[serde(default)]
     force: Vec<ForceFile>,
+    #[serde(default)]
+    pots: Vec<PotsFile>,
     reading: ReadingFile,
 }
 
@@ -129,6 +133,51 @@ pub struct Coordinate {
     /// The design's word on the gyroscopic fidelity: `Some(false)` keeps the rate a state,
     /// `Some(true)` allows the coordinate to be precessional, `None` lets the engine decide.
     pub precessional: Option<bool>,
+    /// Radians for a hinge angle, metres for a pots' level.
+    pub unit: CoordinateUnit,
+}
+
+/// What a coordinate measures: an angle (a hinge) or a length (the level of communicating pots).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CoordinateUnit {
+    Radian,
+    Metre,
+}
+
+impl CoordinateUnit {
+    /// The unit's symbol, as recording field names end (`zeta_rad`, `u_m`).
+    pub fn symbol(self) -> &'static str {
+        match self {
+            CoordinateUnit::Radian => "rad",
+            CoordinateUnit::Metre => "m",
+        }
+    }
+}
+
+/// Two communicating pots of liquid on a carrier body, their level difference a coordinate
+/// (`[[pots]]`; Beghin §51). Positions and axis in the carrier's axes; the tube path runs from
+/// the second pot's base to the first's, endpoints included.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pots {
+    pub name: String,
+    pub description: String,
+    pub body: usize,
+    /// The coordinate u: the first pot's level above rest (the second's is as much below), m.
+    pub level: usize,
+    pub bases_m: [[f64; 3]; 2],
+    /// Unit axis of both pots (up at rest).
+    pub axis: [f64; 3],
+    /// Open section ω₀ of each pot, m².
+    pub section_m2: f64,
+    /// Section of each pot whose liquid the taps hold at rest level, m².
+    pub frozen_section_m2: f64,
+    /// Column height c at equal levels, m.
+    pub rest_level_m: f64,
+    pub density_kg_per_m3: f64,
+    pub tube_path_m: Vec<[f64; 3]>,
+    pub tube_section_m2: f64,
+    /// Viscous loss k: the flow's generalised force −k u̇, N·s/m.
+    pub friction_n_s_per_m: f64,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -250,6 +299,7 @@ pub struct Design {
     pub coordinates: Vec<Coordinate>,
     pub bodies: Vec<Body>,
     pub forces: Vec<Force>,
+    pub pots: Vec<Pots>,
     pub reading_body: usize,
     pub reading_axis: [f64; 3],
     /// The TOML text the design was read from (recorded with every run).
@@ -352,11 +402,28 @@ impl SourceText<'_> {
 /// Checks the typed document section by section (each section's parser is in its own module).
 fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
     let src = SourceText { file, text };
-    let coordinates = coordinates::coordinates(&f.coordinate, &f.parameters, &src)?;
+    let mut coordinates = coordinates::coordinates(&f.coordinate, &f.parameters, &src)?;
     let coord_names: Vec<String> = f.coordinate.iter().map(|c| c.name.clone()).collect();
-    let bodies = bodies::bodies(&f.body, &coordinates, &coord_names, &f.parameters, &src)?;
+    let levels: Vec<usize> = f
+        .pots
+        .iter()
+        .filter_map(|p| coord_names.iter().position(|c| *c == p.level_name()))
+        .collect();
+    let mut bodies = bodies::bodies(
+        &f.body,
+        &coordinates,
+        &coord_names,
+        &levels,
+        &f.parameters,
+        &src,
+    )?;
     let body_names: Vec<String> = f.body.iter().map(|b| b.name.clone()).collect();
-    let forces = forces::forces(&f.force, &body_names, &coord_names, &f.parameters, &src)?;
+    let mut forces = forces::forces(&f.force, &body_names, &coord_names, &f.parameters, &src)?;
+    let (pots, pot_forces) = pots::pots(&f.pots, &mut bodies, &body_names, &coordinates, &src)?;
+    forces.extend(pot_forces);
+    for p in &pots {
+        coordinates[p.level].unit = CoordinateUnit::Metre;
+    }
     let (reading_body, reading_axis) = reading::reading(&f.reading, &body_names, &src)?;
     Ok(Design {
         name: f.name,
@@ -367,6 +434,7 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
         coordinates,
         bodies,
         forces,
+        pots,
         reading_body,
         reading_axis,
         source_text: text.to_string(),
