@@ -13,7 +13,7 @@ macro_rules! shipped {
 
 /// Shipped designs: (name, TOML text).
 pub const DESIGNS: &[(&str, &str)] =
-    shipped!("designs"; "foucault-gyroscope", "anschutz-1906", "sperry-1911");
+    shipped!("designs"; "foucault-gyroscope", "anschutz-1906", "sperry-1911", "slough");
 
 /// Shipped scenes: (name, TOML text).
 pub const SCENES: &[(&str, &str)] = shipped!("scenes";
@@ -24,6 +24,9 @@ pub const SCENES: &[(&str, &str)] = shipped!("scenes";
     "sperry-harbour-0n", "sperry-harbour-35n", "sperry-harbour-60n",
     "sperry-run-north-30kn", "sperry-speed-change-20kn", "sperry-turn-90", "sperry-turn-180",
     "sperry-zigzag-45", "sperry-rolling-cardinal", "sperry-rolling-intercardinal",
+    "slough-harbour-0n", "slough-harbour-35n", "slough-harbour-60n",
+    "slough-run-north-30kn", "slough-speed-change-20kn", "slough-turn-90", "slough-turn-180",
+    "slough-zigzag-45", "slough-rolling-cardinal", "slough-rolling-intercardinal",
 );
 
 /// One-line description of a TOML file (its `description` key).

@@ -251,3 +251,46 @@ fn spin_reversal_is_refused_unless_the_design_allows_it() {
     let reversed = foucault.replace("spin_rpm = 9000.0", "spin_rpm = -9000.0");
     Design::from_toml("foucault.toml", &reversed, &[]).expect("reversible");
 }
+
+fn slough_text() -> String {
+    std::fs::read_to_string(format!(
+        "{}/../../designs/slough.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("design")
+}
+
+/// The Slough's pots: a zero open section, a level that is also a hinge angle, an unknown
+/// carrier and pots whose bases coincide, each refused with file, line and key.
+#[test]
+fn bad_pots_are_refused() {
+    let text = slough_text().replace(
+        r#"section_m2 = "= pot_open_section_m2""#,
+        "section_m2 = 0.0",
+    );
+    let e = design_error(&text);
+    assert_eq!(e.key, "pots.mercury.section_m2", "{e}");
+    assert!(e.message.contains("allowed: > 0"), "{e}");
+    assert_eq!(e.line, Some(line_of(&text, "section_m2 = 0.0")));
+
+    let text = slough_text().replace(
+        r#"hinge = { axis = "z", angle_rad = "xi" }"#,
+        r#"hinge = { axis = "z", angle_rad = "xi + u" }"#,
+    );
+    let e = design_error(&text);
+    assert_eq!(e.key, "pots.mercury.level", "{e}");
+    assert!(e.message.contains("hinge angle"), "{e}");
+
+    let text = slough_text().replace(r#"body = "pots_frame""#, r#"body = "pot_frame""#);
+    let e = design_error(&text);
+    assert_eq!(e.key, "pots.mercury.body", "{e}");
+    assert!(e.message.contains("unknown body `pot_frame`"), "{e}");
+    assert_eq!(e.line, Some(line_of(&text, r#"body = "pot_frame""#)));
+
+    let text = slough_text().replace(
+        r#"second_base_m = ["= -pot_half_spacing_m""#,
+        r#"second_base_m = ["= pot_half_spacing_m""#,
+    );
+    let e = design_error(&text);
+    assert!(e.message.contains("coincide"), "{e}");
+}

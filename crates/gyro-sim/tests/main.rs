@@ -15,6 +15,7 @@ mod modes_and_stiffness;
 mod record_stats;
 mod ship;
 mod solvers;
+mod slough;
 mod solvers_alloc;
 mod sperry;
 mod villarceau;
