@@ -8,7 +8,7 @@ use crate::run::{ManoeuvreEvent, Progress, RunError, RunObserver, RunProbe, RunS
 use crate::scene::Scene;
 use crate::solvers::StopReason;
 use gyro_mcap::contract::{
-    BodyShape, attachments, bodies_record, compass_state, design_constants_record, design_record,
+    BodyShape, PotsDrawing, attachments, bodies_record, compass_state, design_constants_record, design_record,
     energy, events, result_record, run_record, scene_record, ship_state, solver_stats, status, tf,
 };
 use gyro_mcap::{ChannelId, Pose, RecordingError, RecordingWriter, Value, WriterOptions};
@@ -156,11 +156,19 @@ impl Channels {
     fn add(
         w: &mut RecordingWriter,
         coordinates: &[String],
+        units: &[&str],
         record_energy: bool,
     ) -> Result<Channels, RecordingError> {
+        let with_units: Vec<(&str, &str)> = coordinates
+            .iter()
+            .zip(units)
+            .map(|(c, u)| (c.as_str(), *u))
+            .collect();
         Ok(Channels {
-            compass: w
-                .add_record_channel(compass_state::TOPIC, &compass_state::schema(coordinates))?,
+            compass: w.add_record_channel(
+                compass_state::TOPIC,
+                &compass_state::schema_with_units(&with_units),
+            )?,
             ship: w.add_record_channel(ship_state::TOPIC, &ship_state::schema())?,
             events: w.add_record_channel(events::TOPIC, &events::schema())?,
             solver_stats: w.add_record_channel(solver_stats::TOPIC, &solver_stats::schema())?,
@@ -268,8 +276,14 @@ impl<'s, 'p> Recorder<'s, 'p> {
             .iter()
             .map(|c| c.name.clone())
             .collect();
-        let channels =
-            Channels::add(&mut writer, &coordinates, scene.record_energy).map_err(rec_err)?;
+        let units: Vec<&str> = model
+            .design
+            .coordinates
+            .iter()
+            .map(|c| c.unit.symbol())
+            .collect();
+        let channels = Channels::add(&mut writer, &coordinates, &units, scene.record_energy)
+            .map_err(rec_err)?;
         write_static_metadata(&mut writer, sim, scene, &coordinates, rhs_cost_ns)
             .map_err(rec_err)?;
         Ok(Recorder {
@@ -578,6 +592,22 @@ fn bodies_metadata(model: &CompiledModel<ShipProgram>) -> BTreeMap<String, Strin
                 format!("{}", r.spin_rad_per_s),
             );
         }
+    }
+    for p in &model.design.pots {
+        let level = &model.design.coordinates[p.level];
+        let drawing = PotsDrawing {
+            level_field: compass_state::coordinate_field(&level.name, level.unit.symbol()),
+            first_base_m: p.bases_m[0],
+            second_base_m: p.bases_m[1],
+            axis: p.axis,
+            radius_m: (p.section_m2 / std::f64::consts::PI).sqrt(),
+            rest_level_m: p.rest_level_m,
+            tube_path_m: p.tube_path_m.clone(),
+        };
+        m.insert(
+            bodies_record::pots_key(&model.design.bodies[p.body].name, &p.name),
+            drawing.metadata_value(),
+        );
     }
     m
 }

@@ -48,6 +48,49 @@ pub(crate) struct BodyInfo {
     pub shape: Shape,
     /// Spin axis (unit, body frame) and sign of the spin, for rotors.
     pub rotor: Option<([f64; 3], f64)>,
+    /// Communicating pots the body carries, by name.
+    pub pots: Vec<(String, PotsInfo)>,
+}
+
+/// Communicating pots as recorded (`gyro_mcap::contract::PotsDrawing`, carrier's frame).
+#[derive(Debug, Clone, Deserialize)]
+pub(crate) struct PotsInfo {
+    pub level_field: String,
+    pub first_base_m: [f64; 3],
+    pub second_base_m: [f64; 3],
+    pub axis: [f64; 3],
+    pub radius_m: f64,
+    pub rest_level_m: f64,
+    #[serde(default)]
+    pub tube_path_m: Vec<[f64; 3]>,
+}
+
+#[derive(Deserialize)]
+struct PotsHolder {
+    pots: PotsInfo,
+}
+
+/// Parses a `<body>.pots.<name>` metadata value.
+pub(crate) fn parse_pots(text: &str) -> Result<PotsInfo, String> {
+    let p = toml::from_str::<PotsHolder>(&format!("pots = {text}"))
+        .map(|h| h.pots)
+        .map_err(|e| e.message().to_owned())?;
+    let finite = p
+        .first_base_m
+        .iter()
+        .chain(&p.second_base_m)
+        .chain(&p.axis)
+        .chain(p.tube_path_m.iter().flatten())
+        .chain([&p.radius_m, &p.rest_level_m])
+        .all(|x| x.is_finite());
+    let n = p.axis.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if !finite || n == 0.0 || p.radius_m <= 0.0 || p.rest_level_m <= 0.0 {
+        return Err("pots need finite positions, a non-zero axis and a positive radius and level".into());
+    }
+    Ok(PotsInfo {
+        axis: p.axis.map(|x| x / n),
+        ..p
+    })
 }
 
 #[derive(Debug, Clone)]
@@ -262,7 +305,27 @@ fn bodies(
                     Shape::Disc { .. } => Some(([0.0, 0.0, 1.0], 1.0)),
                     _ => None,
                 });
-            out.insert(body.to_owned(), BodyInfo { shape, rotor });
+            out.insert(
+                body.to_owned(),
+                BodyInfo {
+                    shape,
+                    rotor,
+                    pots: Vec::new(),
+                },
+            );
+        }
+        for (key, value) in entries {
+            let Some((body, name)) = key.split_once(&format!(".{}.", bodies_record::POTS)) else {
+                continue;
+            };
+            let pots = parse_pots(value).map_err(|detail| ViewError::Metadata {
+                path: path.to_path_buf(),
+                key: format!("{}/{key}", bodies_record::NAME),
+                detail,
+            })?;
+            if let Some(b) = out.get_mut(body) {
+                b.pots.push((name.to_owned(), pots));
+            }
         }
     }
     Ok(out)

@@ -12,7 +12,7 @@ use rerun::{
 };
 
 use crate::math::{self, Quat, TiltExaggeration};
-use crate::run::{BodyInfo, EARTH_FRAME, RunData, Track};
+use crate::run::{BodyInfo, EARTH_FRAME, PotsInfo, RunData, Track};
 use crate::{ViewError, ViewOptions, decimate, sim_time};
 
 /// Colours of bodies by depth in the chain.
@@ -280,6 +280,73 @@ fn log_spin_marker(
     Ok(())
 }
 
+/// Communicating pots on their carrier, at `<carrier>/pots/<name>`: the tube and the pots'
+/// outlines (static), and each pot's liquid column, c ± u high, from the recorded level.
+fn log_pots(
+    rec: &RecordingStream,
+    entity: &str,
+    name: &str,
+    pots: &PotsInfo,
+    run: &RunData,
+    opts: &ViewOptions,
+) -> Result<(), ViewError> {
+    let root = format!("{entity}/pots/{}", crate::run::entity_name(name));
+    let a = pots.axis;
+    let c = pots.rest_level_m;
+    let along = |p: [f64; 3], d: f64| [p[0] + d * a[0], p[1] + d * a[1], p[2] + d * a[2]];
+    let upright = quat_f32(math::rotation_between([0.0, 0.0, 1.0], a));
+    let mercury = Color::from_rgb(205, 208, 216);
+    rec.log_static(
+        format!("{root}/tube"),
+        &LineStrips3D::new([pots.tube_path_m.iter().map(|p| f32x3(*p)).collect::<Vec<_>>()])
+            .with_colors([mercury])
+            .with_radii([(0.3 * pots.radius_m) as f32]),
+    )?;
+    // The pots themselves: 2c high, open at the top.
+    rec.log_static(
+        format!("{root}/outline"),
+        &Cylinders3D::from_lengths_and_radii(
+            [(2.0 * c) as f32; 2],
+            [(1.15 * pots.radius_m) as f32; 2],
+        )
+        .with_centers([
+            f32x3(along(pots.first_base_m, c)),
+            f32x3(along(pots.second_base_m, c)),
+        ])
+        .with_quaternions([upright, upright])
+        .with_colors([Color::from_rgb(120, 120, 130)])
+        .with_fill_mode(FillMode::MajorWireframe),
+    )?;
+    let Some(level) = run.compass.get(&pots.level_field) else {
+        return Ok(());
+    };
+    let kept = decimate(&run.compass.time_ns, opts);
+    let time = sim_time(kept.iter().map(|&k| run.compass.time_ns[k]).collect());
+    for (pot, base, sign) in [
+        ("first", pots.first_base_m, 1.0),
+        ("second", pots.second_base_m, -1.0),
+    ] {
+        let column = format!("{root}/{pot}");
+        rec.log_static(
+            format!("{column}/liquid"),
+            &Cylinders3D::from_lengths_and_radii([1.0_f32], [pots.radius_m as f32])
+                .with_colors([mercury])
+                .with_fill_mode(FillMode::Solid),
+        )?;
+        let height = |k: usize| (c + sign * level[k]).max(0.0);
+        rec.send_columns(
+            column.as_str(),
+            [time.clone()],
+            Transform3D::update_fields()
+                .with_many_translation(kept.iter().map(|&k| f32x3(along(base, 0.5 * height(k)))))
+                .with_many_quaternion(kept.iter().map(|_| upright))
+                .with_many_scale(kept.iter().map(|&k| [1.0, 1.0, height(k) as f32]))
+                .columns_of_unit_batches()?,
+        )?;
+    }
+    Ok(())
+}
+
 /// Frame name → entity path, and frame name → depth below the earth frame.
 type FramePaths = (BTreeMap<String, String>, BTreeMap<String, usize>);
 
@@ -448,6 +515,9 @@ pub(crate) fn log_scene(
         if let Some(info) = run.bodies.get(name) {
             log_shape(rec, path, name, info, body_color(depth, run_index))?;
             log_spin_marker(rec, path, info, &time, s.time_ns.len())?;
+            for (pots_name, pots) in &info.pots {
+                log_pots(rec, path, pots_name, pots, run, opts)?;
+            }
             hull_drawn |= matches!(info.shape, Shape::Hull { .. });
         }
     }

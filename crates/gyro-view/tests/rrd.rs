@@ -462,3 +462,46 @@ fn the_default_fit_is_the_analysis_crates_and_is_drawn_over_the_data() {
     // gyro-analysis's least-squares fit recovers the noiseless curve it was given.
     assert!(worst < 1e-6, "fit vs data: {worst:e}°");
 }
+
+/// Communicating pots on a body: the tube and the pots' outlines are static in the carrier's
+/// frame, and each pot's liquid column is a unit cylinder scaled to c ± u and centred half way
+/// up, at every kept sample, from the recorded level.
+#[test]
+fn pots_are_drawn_with_their_recorded_levels() {
+    let dir = workdir("pots");
+    let run = dir.join("pots.mcap");
+    common::write_recording_with_pots(&run, SAMPLES, RATE_HZ);
+    let rrd = dir.join("pots.rrd");
+    let opts = ViewOptions {
+        sink: Sink::Save(rrd.clone()),
+        max_pose_rate_hz: 1.0,
+        ..Default::default()
+    };
+    view(std::slice::from_ref(&run), &opts).expect("view");
+    let Some(py) = rerun_python() else { return };
+    let d = dump(&py, &rrd);
+    let pots = "/runs/pots/earth/ship/gimbal/float/pots/mercury";
+    assert!(has_static(&d, &format!("{pots}/tube"), "LineStrips3D"));
+    assert!(has_static(&d, &format!("{pots}/outline"), "Cylinders3D"));
+    let p = common::pots();
+    let c = p.rest_level_m;
+    for (pot, base, sign) in [
+        ("first", p.first_base_m, 1.0),
+        ("second", p.second_base_m, -1.0),
+    ] {
+        let column = format!("{pots}/{pot}");
+        assert!(has_static(&d, &format!("{column}/liquid"), "Cylinders3D"));
+        let (t, scale) = temporal(&d, &column, "scale");
+        let (tt, translation) = temporal(&d, &column, "translation");
+        assert_eq!(t.len(), 601, "{column}: one column a kept sample");
+        assert_eq!(t, tt);
+        for (i, &ns) in t.iter().enumerate() {
+            let h = c + sign * common::mercury_level(ns as f64 * 1e-9);
+            let s = f64s(&scale[i][0]);
+            let x = f64s(&translation[i][0]);
+            assert!((s[2] - h).abs() < 1e-6, "{column}[{i}]: height {} vs {h}", s[2]);
+            assert!((x[2] - (base[2] + 0.5 * h)).abs() < 1e-6, "{column}[{i}]: centre");
+            assert!((x[0] - base[0]).abs() < 1e-6);
+        }
+    }
+}

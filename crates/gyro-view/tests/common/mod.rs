@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use gyro_mcap::contract::{
-    BodyShape, bodies_record, compass_state, design_record, events, result_record, run_record,
+    BodyShape, PotsDrawing, bodies_record, compass_state, design_record, events, result_record, run_record,
     ship_state, status, tf,
 };
 use gyro_mcap::{Pose, RecordingWriter, Value, WriterOptions};
@@ -67,11 +67,46 @@ rotor = { axis = [1.0, 0.0, 0.0], polar_inertia_kg_m2 = 0.01, spin_rpm = 6000.0,
 shape = { kind = "disc", radius_m = 0.06, thickness_m = 0.03 }
 "#;
 
+/// The synthetic mercury level of [`write_recording_with_pots`], m.
+pub fn mercury_level(t: f64) -> f64 {
+    0.004 * (std::f64::consts::TAU * t / 30.0).sin()
+}
+
+/// The pots [`write_recording_with_pots`] puts on the float.
+pub fn pots() -> PotsDrawing {
+    PotsDrawing {
+        level_field: "u_m".into(),
+        first_base_m: [0.1, 0.0, -0.02],
+        second_base_m: [-0.1, 0.0, -0.02],
+        axis: [0.0, 0.0, 1.0],
+        radius_m: 0.01,
+        rest_level_m: 0.03,
+        tube_path_m: vec![[-0.1, 0.0, -0.02], [0.1, 0.0, -0.02]],
+    }
+}
+
 /// Writes `n` samples at `rate_hz` to `path`.
 pub fn write_recording(path: &Path, n: usize, rate_hz: f64) {
+    write(path, n, rate_hz, false);
+}
+
+/// The same run with communicating pots on the float, their level a coordinate `u` in metres.
+pub fn write_recording_with_pots(path: &Path, n: usize, rate_hz: f64) {
+    write(path, n, rate_hz, true);
+}
+
+fn write(path: &Path, n: usize, rate_hz: f64, with_pots: bool) {
     let mut w = RecordingWriter::create(path, WriterOptions::default()).expect("create");
+    let coordinates: &[(&str, &str)] = if with_pots {
+        &[("theta", "rad"), ("u", "m")]
+    } else {
+        &[("theta", "rad")]
+    };
     let c = w
-        .add_record_channel(compass_state::TOPIC, &compass_state::schema(&["theta"]))
+        .add_record_channel(
+            compass_state::TOPIC,
+            &compass_state::schema_with_units(coordinates),
+        )
         .expect("channel");
     let s = w
         .add_record_channel(ship_state::TOPIC, &ship_state::schema())
@@ -85,12 +120,22 @@ pub fn write_recording(path: &Path, n: usize, rate_hz: f64) {
         let t = i as f64 / rate_hz;
         let ns = (t * 1e9).round() as u64;
         let err = reading_error(t);
-        w.write_f64_record(
-            c,
-            ns,
-            &[t, err, heading + err, heading, tilt(t), tilt(t), 0.0],
-        )
-        .expect("compass");
+        let compass: Vec<f64> = if with_pots {
+            vec![
+                t,
+                err,
+                heading + err,
+                heading,
+                tilt(t),
+                tilt(t),
+                mercury_level(t),
+                0.0,
+                0.0,
+            ]
+        } else {
+            vec![t, err, heading + err, heading, tilt(t), tilt(t), 0.0]
+        };
+        w.write_f64_record(c, ns, &compass).expect("compass");
         let accel = if (300.0..320.0).contains(&t) {
             0.25
         } else {
@@ -193,6 +238,12 @@ pub fn write_recording(path: &Path, n: usize, rate_hz: f64) {
         bodies.insert(
             bodies_record::key(body, bodies_record::PARENT),
             parent.to_owned(),
+        );
+    }
+    if with_pots {
+        bodies.insert(
+            bodies_record::pots_key("float", "mercury"),
+            pots().metadata_value(),
         );
     }
     w.write_metadata(bodies_record::NAME, &bodies)
