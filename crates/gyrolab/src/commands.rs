@@ -256,6 +256,8 @@ pub fn demo(out: &Path, json: bool) -> Result<ExitCode, CliError> {
         "speed-change-20kn",
         "sperry-harbour-35n",
         "sperry-speed-change-20kn",
+        "slough-harbour-35n",
+        "slough-speed-change-20kn",
     ];
     let mut rows = Vec::new();
     let mut lines = Table::new(&[
@@ -489,13 +491,15 @@ pub fn compare(
 
 /// The baseline scene set: small and fast, covering settling, speed error, a speed change and
 /// the exact Foucault reference, for every compass that has them.
-pub const REGRESS_SCENES: [&str; 6] = [
+pub const REGRESS_SCENES: [&str; 8] = [
     "foucault-azimuth-45n",
     "harbour-50n",
     "run-north-30kn",
     "speed-change-20kn",
     "sperry-harbour-35n",
     "sperry-speed-change-20kn",
+    "slough-harbour-35n",
+    "slough-speed-change-20kn",
 ];
 
 pub fn regress(
