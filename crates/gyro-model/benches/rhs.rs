@@ -46,7 +46,12 @@ fn model(d: Design, fidelity: Fidelity) -> Option<CompiledModel<Moored>> {
 
 fn bench_engine(c: &mut Criterion) {
     let mut group = c.benchmark_group("engine");
-    for name in ["anschutz-1906", "foucault-gyroscope", "sperry-1911", "slough"] {
+    for name in [
+        "anschutz-1906",
+        "foucault-gyroscope",
+        "sperry-1911",
+        "slough",
+    ] {
         for fidelity in [Fidelity::Full, Fidelity::Gyroscopic] {
             let Some(m) = design(name).and_then(|d| model(d, fidelity)) else {
                 continue;

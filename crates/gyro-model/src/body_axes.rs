@@ -27,6 +27,7 @@
 use crate::design::{Design, Force};
 use crate::dual::{Jet, M3, Real, V3};
 use crate::expr::QuadExpr;
+use crate::force_elements::{self, RateTerms, SpringsInto};
 use crate::reference_engine::{Chain, EvalInput, EvalOutput, evaluate_pots_any};
 
 mod rates;
@@ -543,7 +544,16 @@ pub fn evaluate<T: Real, const N: usize>(
 
     // Coordinate-space force elements.
     clear(k_out, n);
-    coordinate_forces(kin, inp.q, &q, k_out, &mut v, &mut qf);
+    force_elements::add(
+        &kin.forces,
+        n,
+        inp.q,
+        &q,
+        &mut KForm(k_out),
+        SpringsInto::Potential,
+        &mut v,
+        &mut qf,
+    );
 
     for i in 0..n {
         c_out[i] = qf[i] - bt[i] + t2.d[i] + t0.d[i] - v.d[i];
@@ -551,13 +561,27 @@ pub fn evaluate<T: Real, const N: usize>(
             k_out[i][k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
         }
     }
-    if let Some(terms) = pots_terms(kin, inp) {
-        for i in 0..n {
-            c_out[i] += terms.c[i];
-            for k in 0..n {
-                m_out[i][k] += terms.m[i * n + k];
-                k_out[i][k] += terms.k[i * n + k];
-            }
+    add_pots(kin, inp, m_out, k_out, c_out);
+}
+
+/// Adds the communicating pots' M, K and c (nothing without pots).
+#[inline(always)]
+fn add_pots<T: Real, const N: usize>(
+    kin: &BodyAxesChain,
+    inp: &EvalInput<T>,
+    m_out: &mut [[T; N]; N],
+    k_out: &mut [[T; N]; N],
+    c_out: &mut [T; N],
+) {
+    let Some(terms) = pots_terms(kin, inp) else {
+        return;
+    };
+    let n = kin.n;
+    for i in 0..n {
+        c_out[i] += terms.c[i];
+        for k in 0..n {
+            m_out[i][k] += terms.m[i * n + k];
+            k_out[i][k] += terms.k[i * n + k];
         }
     }
 }
@@ -588,67 +612,27 @@ pub(super) fn pots_terms<T: Real>(kin: &BodyAxesChain, inp: &EvalInput<T>) -> Op
     Some(t)
 }
 
-/// The coordinate-space force elements: dampers into K (−c ∇e ∇eᵀ), springs into V, and
-/// generalised forces into Q.
-#[inline(always)]
-fn coordinate_forces<T: Real, const N: usize>(
-    kin: &BodyAxesChain,
-    q_real: &[T],
-    q: &[Jet<T, N>; N],
-    k_out: &mut [[T; N]; N],
-    v: &mut Jet<T, N>,
-    qf: &mut [T; N],
-) {
-    let n = kin.n;
-    for f in &kin.forces {
-        match f {
-            Force::Damper {
-                expr, coefficient, ..
-            } => {
-                let mut g = [T::zero(); N];
-                expr.add_gradient(q_real, &mut g[..n]);
-                for i in 0..n {
-                    if g[i] == T::zero() {
-                        continue;
-                    }
-                    for k in 0..n {
-                        k_out[i][k] -= g[i] * g[k] * *coefficient;
-                    }
-                }
+/// The equations' K, where the force elements' rate terms go in K form.
+pub(super) struct KForm<'a, T, const N: usize>(pub &'a mut [[T; N]; N]);
+
+impl<T: Real, const N: usize> RateTerms<T> for KForm<'_, T, N> {
+    /// −c ∇e ∇eᵀ.
+    #[inline(always)]
+    fn damper(&mut self, g: &[T], coefficient: f64) {
+        for (i, &gi) in g.iter().enumerate() {
+            if gi == T::zero() {
+                continue;
             }
-            Force::Spring {
-                expr,
-                stiffness,
-                rest,
-                preload,
-                ..
-            } => {
-                let e = expr.eval(&q[..n]);
-                let de = e - *rest;
-                *v += de * de * (0.5 * stiffness) + e * *preload;
+            for (k, &gk) in g.iter().enumerate() {
+                self.0[i][k] -= gi * gk * coefficient;
             }
-            Force::Generalized {
-                coordinate, torque, ..
-            } => {
-                qf[*coordinate] += torque.eval(q_real);
-            }
-            Force::Servo {
-                coordinate,
-                relation,
-                stiffness,
-                damping,
-                ..
-            } => {
-                let i = *coordinate;
-                qf[i] -= (q_real[i] - relation.eval(q_real)) * *stiffness;
-                let mut g = [T::zero(); N];
-                relation.add_gradient(q_real, &mut g[..n]);
-                g[i] -= T::one();
-                for k in 0..n {
-                    k_out[i][k] += g[k] * *damping;
-                }
-            }
-            Force::BodyForce { .. } => {}
+        }
+    }
+    /// The servo's row: c ∇(r − qᵢ).
+    #[inline(always)]
+    fn servo(&mut self, row: usize, g: &[T], damping: f64) {
+        for (k, &gk) in g.iter().enumerate() {
+            self.0[row][k] += gk * damping;
         }
     }
 }

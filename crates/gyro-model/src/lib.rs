@@ -28,6 +28,7 @@ mod dual;
 pub mod earth;
 pub mod error;
 mod expr;
+mod force_elements;
 pub mod linalg;
 mod model;
 mod reference_engine;

@@ -26,6 +26,7 @@
 
 use crate::design::{Body, Design, Force, Hinge, Pots, Root};
 use crate::dual::{Jet, M3, Real, V3};
+use crate::force_elements::{self, RateTerms, SpringsInto};
 
 /// The immutable, index-based form of a design's chain that the engine walks.
 #[derive(Clone, Debug)]
@@ -297,8 +298,32 @@ fn body_kinematics<T: Real, const N: usize>(
     k
 }
 
-/// The force elements: dampers into K, springs into V, body forces (their moments about the
-/// pivot on each body's Jacobian) and generalised forces into Q.
+/// The equations' K (n × n, row-major), where the force elements' rate terms go in K form.
+struct FlatK<'a, T> {
+    k: &'a mut [T],
+    n: usize,
+}
+
+impl<T: Real> RateTerms<T> for FlatK<'_, T> {
+    /// −c ∇e ∇eᵀ.
+    fn damper(&mut self, g: &[T], coefficient: f64) {
+        for (i, &gi) in g.iter().enumerate() {
+            for (k, &gk) in g.iter().enumerate() {
+                self.k[i * self.n + k] -= gi * gk * coefficient;
+            }
+        }
+    }
+    /// The servo's row: c ∇(r − qᵢ).
+    fn servo(&mut self, row: usize, g: &[T], damping: f64) {
+        for (k, &gk) in g.iter().enumerate() {
+            self.k[row * self.n + k] += gk * damping;
+        }
+    }
+}
+
+/// The force elements: the coordinate-space ones (`force_elements`: dampers into K, springs
+/// into V, generalised forces and servos into Q) and body forces, their moments about the pivot
+/// on each body's Jacobian.
 fn generalised_forces<T: Real, const N: usize>(
     chain: &Chain,
     q_real: &[T],
@@ -309,71 +334,36 @@ fn generalised_forces<T: Real, const N: usize>(
     qf: &mut [T; N],
 ) {
     let n = chain.n;
+    force_elements::add(
+        &chain.forces,
+        n,
+        q_real,
+        q,
+        &mut FlatK { k: k_out, n },
+        SpringsInto::Potential,
+        v,
+        qf,
+    );
     for f in &chain.forces {
-        match f {
-            Force::Damper {
-                expr, coefficient, ..
-            } => {
-                let mut g = [T::zero(); N];
-                let qv: [T; N] = std::array::from_fn(|i| if i < n { q_real[i] } else { T::zero() });
-                expr.add_gradient(&qv[..n], &mut g[..n]);
-                for i in 0..n {
-                    for k in 0..n {
-                        k_out[i * n + k] -= g[i] * g[k] * *coefficient;
-                    }
-                }
-            }
-            Force::Spring {
-                expr,
-                stiffness,
-                rest,
-                preload,
-                ..
-            } => {
-                let e = expr.eval(&q[..n]);
-                let de = e - *rest;
-                *v += de * de * (0.5 * stiffness) + e * *preload;
-            }
-            Force::BodyForce {
-                body,
-                direction,
-                force_n,
-                point,
-                ..
-            } => {
-                let k = &kin[*body];
-                let pb = V3([
-                    point[0].eval(&q[..n]),
-                    point[1].eval(&q[..n]),
-                    point[2].eval(&q[..n]),
-                ]);
-                let r_p = k.p.add(&k.r.mul_v(&pb));
-                let f_w = k.r.mul_v(&V3::from_f64(*direction)).scale_f(*force_n);
-                let tau = r_p.cross(&f_w);
-                for (i, qi) in qf.iter_mut().enumerate().take(n) {
-                    *qi += k.jw[i].dot(&tau).v;
-                }
-            }
-            Force::Generalized {
-                coordinate, torque, ..
-            } => {
-                qf[*coordinate] += torque.eval(&q[..n]).v;
-            }
-            Force::Servo {
-                coordinate,
-                relation,
-                stiffness,
-                damping,
-                ..
-            } => {
-                let i = *coordinate;
-                qf[i] -= (q_real[i] - relation.eval(q_real)) * *stiffness;
-                let mut g = [T::zero(); N];
-                relation.add_gradient(q_real, &mut g[..n]);
-                g[i] -= T::one();
-                for k in 0..n {
-                    k_out[i * n + k] += g[k] * *damping;
-                }
+        if let Force::BodyForce {
+            body,
+            direction,
+            force_n,
+            point,
+            ..
+        } = f
+        {
+            let k = &kin[*body];
+            let pb = V3([
+                point[0].eval(&q[..n]),
+                point[1].eval(&q[..n]),
+                point[2].eval(&q[..n]),
+            ]);
+            let r_p = k.p.add(&k.r.mul_v(&pb));
+            let f_w = k.r.mul_v(&V3::from_f64(*direction)).scale_f(*force_n);
+            let tau = r_p.cross(&f_w);
+            for (i, qi) in qf.iter_mut().enumerate().take(n) {
+                *qi += k.jw[i].dot(&tau).v;
             }
         }
     }

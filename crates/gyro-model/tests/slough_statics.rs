@@ -6,8 +6,7 @@
 
 use gyro_model::theory::Slough;
 use gyro_model::{
-    CompiledModel, Design, Effects, Fidelity, InitialCondition, ModelOptions,
-    Moored,
+    CompiledModel, Design, Effects, Fidelity, InitialCondition, ModelOptions, Moored,
 };
 
 const DESIGN: &str = include_str!("../../../designs/slough.toml");
@@ -120,7 +119,10 @@ fn period_damping_and_mercury_mode_are_eqs_19_to_23() {
         let mercury = modes[2];
         let r = th.mercury_roots()[1];
         let dist = (mercury.0 - r.0).hypot(mercury.1.abs() - r.1.abs()) / r.0.hypot(r.1);
-        assert!(dist < 0.01, "{lat}°: mercury {mercury:?} vs trinomial {r:?}");
+        assert!(
+            dist < 0.01,
+            "{lat}°: mercury {mercury:?} vs trinomial {r:?}"
+        );
     }
     // With every compartment open the mercury's own undamped period is the design's 30 s.
     let th = theory(&design(35.0, &[]), 35.0);
@@ -151,10 +153,18 @@ fn stable_only_for_k_above_ap_with_reversed_spin() {
     assert!(stable && (ratio(&th) - 1.05).abs() < 1e-3, "{}", ratio(&th));
     assert!(worst < 0.0, "K = 1.05 ap: the fastest growth {worst} s⁻¹");
     let (stable, worst, th) = growth(&[("open_compartments", open(0.95))]);
-    assert!(!stable && (ratio(&th) - 0.95).abs() < 1e-3, "{}", ratio(&th));
+    assert!(
+        !stable && (ratio(&th) - 0.95).abs() < 1e-3,
+        "{}",
+        ratio(&th)
+    );
     assert!(th.counterweight_moment() > 0.85 * th.overload_moment);
     // The divergence: the positive root of eq. (20).
-    let r = th.compass_roots().iter().map(|r| r.0).fold(f64::MIN, f64::max);
+    let r = th
+        .compass_roots()
+        .iter()
+        .map(|r| r.0)
+        .fold(f64::MIN, f64::max);
     // Within 15 %: 5 % from the boundary, the chain's small terms that eq. (20) leaves out
     // (0.2 % of K, see the period test) are a tenth of K − ap − τ.
     assert!(
@@ -175,7 +185,10 @@ fn trunnion_friction_holds_the_nutation() {
         *sorted_modes(&m).last().unwrap()
     };
     let free = fastest(&[("trunnion_damper_n_m_s_per_rad", 0.0)]);
-    assert!(free.0 > 0.1 && free.1.abs() > 100.0, "no friction: {free:?}");
+    assert!(
+        free.0 > 0.1 && free.1.abs() > 100.0,
+        "no friction: {free:?}"
+    );
     let held = fastest(&[]);
     assert!(held.0 < -1.0, "with the design's friction: {held:?}");
 }

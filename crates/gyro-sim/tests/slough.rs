@@ -184,12 +184,11 @@ atol = 1e-12
     let settled = err(900.0) - err(600.0);
     // The new equilibrium: the reading at rest at this latitude.
     let rest = {
-        let sc = scene_from(
-            &harbour(lat, undamped, 0.01),
-            &SceneOverrides::default(),
-        );
+        let sc = scene_from(&harbour(lat, undamped, 0.01), &SceneOverrides::default());
         let s = Simulation::new(&sc).expect("compiles");
-        s.model.readout(0.0, &s.model.x_equilibrium).reading_error_rad
+        s.model
+            .readout(0.0, &s.model.x_equilibrium)
+            .reading_error_rad
     };
     let swing = out
         .iter()
@@ -220,4 +219,64 @@ atol = 1e-12
         "the mercury's lag: {deficit} vs {expected_deficit}"
     );
     assert!(swing < 0.05 * expected.abs(), "swing {swing:e} rad");
+}
+
+/// Beghin ch. I with a fluid: the pots' Lagrangian closes the energy balance. Released 2° off at
+/// 35°N, Jacobi's integral h = T₂ − T₀ + V (the mercury's columns and flow included) moves by
+/// the work of the servo and of the dampers (the flow's friction k u̇² among them),
+/// ∫ (P_servo + P_dampers) dt by Simpson's rule on the samples, to 1e-9 of the energy's scale,
+/// over 1 h in `gyroscopic` and 5 min in `full` (whose 74-Hz nutation the trunnions damp).
+#[test]
+fn energy_changes_by_the_servo_and_friction_work() {
+    for (fidelity, seconds, rate_hz, method, rtol) in [
+        ("gyroscopic", 3600.0, 5.0, Method::Dop853, 1e-13),
+        ("full", 300.0, 400.0, Method::Rodas4, 1e-11),
+    ] {
+        let text = format!(
+            r#"name = "t"
+duration_s = {seconds}
+output_rate_hz = {rate_hz}
+[start]
+latitude_deg = 35.0
+[compass]
+design = "slough"
+azimuth_offset_deg = 2.0
+[simulation]
+fidelity = "{fidelity}"
+integrator = "rodas4"
+"#
+        );
+        let sc = scene_from(&text, &SceneOverrides::default());
+        let (sim, out, stats) = run(&sc, method, tol(rtol, 1e-16));
+        let e: Vec<(f64, gyro_model::Energetics)> = out
+            .iter()
+            .map(|(t, x)| (*t, sim.model.energetics(*t, x).expect("solvable")))
+            .collect();
+        let scale =
+            e[0].1.kinetic_j.abs() + e[0].1.frame_kinetic_j.abs() + e[0].1.potential_j.abs();
+        let (mut servo, mut dampers, mut worst) = (0.0, 0.0, 0.0f64);
+        for k in (2..e.len()).step_by(2) {
+            let h = e[k].0 - e[k - 2].0;
+            let simpson = |p: &dyn Fn(usize) -> f64| h / 6.0 * (p(k - 2) + 4.0 * p(k - 1) + p(k));
+            servo += simpson(&|i| e[i].1.servo_power_w);
+            dampers += simpson(&|i| e[i].1.damper_power_w);
+            let closure = e[k].1.energy_j - e[0].1.energy_j - servo - dampers;
+            worst = worst.max(closure.abs());
+        }
+        let gained = e[e.len() - 1].1.energy_j - e[0].1.energy_j;
+        println!(
+            "{fidelity}: energy scale {scale:.3e} J, h gained {gained:.4e} J, servo work {servo:.4e} J, dampers {dampers:.4e} J, worst closure {worst:.2e} J ({:.1e} of the scale); {} steps",
+            worst / scale,
+            stats.solver.steps
+        );
+        assert!(dampers < 0.0, "{fidelity}: friction dissipates");
+        assert!(
+            worst < 1e-9 * scale,
+            "{fidelity}: closure {worst:e} J vs {scale:e} J"
+        );
+        assert!(
+            worst < 1e-3 * gained.abs().max(dampers.abs()),
+            "{fidelity}: closure {worst:e} J vs the work done"
+        );
+    }
 }

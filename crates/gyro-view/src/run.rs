@@ -85,7 +85,9 @@ pub(crate) fn parse_pots(text: &str) -> Result<PotsInfo, String> {
         .all(|x| x.is_finite());
     let n = p.axis.iter().map(|x| x * x).sum::<f64>().sqrt();
     if !finite || n == 0.0 || p.radius_m <= 0.0 || p.rest_level_m <= 0.0 {
-        return Err("pots need finite positions, a non-zero axis and a positive radius and level".into());
+        return Err(
+            "pots need finite positions, a non-zero axis and a positive radius and level".into(),
+        );
     }
     Ok(PotsInfo {
         axis: p.axis.map(|x| x / n),

@@ -298,9 +298,13 @@ fn log_pots(
     let mercury = Color::from_rgb(205, 208, 216);
     rec.log_static(
         format!("{root}/tube"),
-        &LineStrips3D::new([pots.tube_path_m.iter().map(|p| f32x3(*p)).collect::<Vec<_>>()])
-            .with_colors([mercury])
-            .with_radii([(0.3 * pots.radius_m) as f32]),
+        &LineStrips3D::new([pots
+            .tube_path_m
+            .iter()
+            .map(|p| f32x3(*p))
+            .collect::<Vec<_>>()])
+        .with_colors([mercury])
+        .with_radii([(0.3 * pots.radius_m) as f32]),
     )?;
     // The pots themselves: 2c high, open at the top.
     rec.log_static(

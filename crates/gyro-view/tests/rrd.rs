@@ -499,8 +499,15 @@ fn pots_are_drawn_with_their_recorded_levels() {
             let h = c + sign * common::mercury_level(ns as f64 * 1e-9);
             let s = f64s(&scale[i][0]);
             let x = f64s(&translation[i][0]);
-            assert!((s[2] - h).abs() < 1e-6, "{column}[{i}]: height {} vs {h}", s[2]);
-            assert!((x[2] - (base[2] + 0.5 * h)).abs() < 1e-6, "{column}[{i}]: centre");
+            assert!(
+                (s[2] - h).abs() < 1e-6,
+                "{column}[{i}]: height {} vs {h}",
+                s[2]
+            );
+            assert!(
+                (x[2] - (base[2] + 0.5 * h)).abs() < 1e-6,
+                "{column}[{i}]: centre"
+            );
             assert!((x[0] - base[0]).abs() < 1e-6);
         }
     }

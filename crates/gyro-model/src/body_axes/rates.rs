@@ -16,8 +16,8 @@
 
 use super::walk::{Carried, clear, cross_cg};
 use super::{BodyAxesChain, Frame, inertia_mul, pots_terms, re, scale};
-use crate::design::Force;
 use crate::dual::{Jet, Real, V3};
+use crate::force_elements::{self, RateTerms, SpringsInto};
 use crate::reference_engine::EvalInput;
 
 /// A jet's value with its derivative along `u`.
@@ -132,7 +132,19 @@ pub fn evaluate_rates<T: Real, const N: usize>(
 
     // Coordinate-space force elements.
     let mut damping = [T::zero(); N];
-    coordinate_forces(kin, inp.q, u, &q, &mut damping, &mut lagrangian, &mut qf);
+    force_elements::add(
+        &kin.forces,
+        n,
+        inp.q,
+        &q,
+        &mut AtRates {
+            damping: &mut damping,
+            u,
+        },
+        SpringsInto::Lagrangian,
+        &mut lagrangian,
+        &mut qf,
+    );
 
     for i in 0..n {
         r_out[i] = qf[i] - pt[i] + lagrangian.d[i] - p[i].d[0] + damping[i];
@@ -153,73 +165,34 @@ pub fn evaluate_rates<T: Real, const N: usize>(
     }
 }
 
-/// The coordinate-space force elements: dampers' forces −c ė ∇e at the rates `u` (K is never
-/// formed), springs into L, and generalised forces into Q.
-#[inline(always)]
-fn coordinate_forces<T: Real, const N: usize>(
-    kin: &BodyAxesChain,
-    q_real: &[T],
-    u: &[T],
-    q: &[Jet<T, N>; N],
-    damping: &mut [T; N],
-    lagrangian: &mut Jet<T, N>,
-    qf: &mut [T; N],
-) {
-    let n = kin.n;
-    for f in &kin.forces {
-        match f {
-            Force::Damper {
-                expr, coefficient, ..
-            } => {
-                let mut g = [T::zero(); N];
-                expr.add_gradient(q_real, &mut g[..n]);
-                let mut rate = T::zero();
-                for i in 0..n {
-                    rate += g[i] * u[i];
-                }
-                if rate == T::zero() {
-                    continue;
-                }
-                for i in 0..n {
-                    damping[i] -= g[i] * rate * *coefficient;
-                }
-            }
-            Force::Spring {
-                expr,
-                stiffness,
-                rest,
-                preload,
-                ..
-            } => {
-                let e = expr.eval(&q[..n]);
-                let de = e - *rest;
-                *lagrangian -= de * de * (0.5 * stiffness) + e * *preload;
-            }
-            Force::Generalized {
-                coordinate, torque, ..
-            } => {
-                qf[*coordinate] += torque.eval(q_real);
-            }
-            Force::Servo {
-                coordinate,
-                relation,
-                stiffness,
-                damping: c,
-                ..
-            } => {
-                let i = *coordinate;
-                let mut g = [T::zero(); N];
-                relation.add_gradient(q_real, &mut g[..n]);
-                g[i] -= T::one();
-                let mut rate = T::zero();
-                for k in 0..n {
-                    rate += g[k] * u[k];
-                }
-                qf[i] -= (q_real[i] - relation.eval(q_real)) * *stiffness;
-                damping[i] += rate * *c;
-            }
-            Force::BodyForce { .. } => {}
+/// The force elements' rate terms taken at the rates `u` (K is never formed): a damper's
+/// −c ė ∇e, a servo's c (ṙ − q̇ᵢ).
+struct AtRates<'a, T, const N: usize> {
+    damping: &'a mut [T; N],
+    u: &'a [T],
+}
+
+impl<T: Real, const N: usize> RateTerms<T> for AtRates<'_, T, N> {
+    #[inline(always)]
+    fn damper(&mut self, g: &[T], coefficient: f64) {
+        let mut rate = T::zero();
+        for (gi, ui) in g.iter().zip(self.u) {
+            rate += *gi * *ui;
         }
+        if rate == T::zero() {
+            return;
+        }
+        for (d, gi) in self.damping.iter_mut().zip(g) {
+            *d -= *gi * rate * coefficient;
+        }
+    }
+    #[inline(always)]
+    fn servo(&mut self, row: usize, g: &[T], damping: f64) {
+        let mut rate = T::zero();
+        for (gk, uk) in g.iter().zip(self.u) {
+            rate += *gk * *uk;
+        }
+        self.damping[row] += rate * damping;
     }
 }
 

@@ -64,23 +64,33 @@ pub(super) fn pots(
     let mut forces = Vec::new();
     for p in pots {
         let anchor = format!("name = \"{}\"", p.name);
-        let bad = |key: &str, m: String| {
-            src.err(Some(&anchor), key, format!("pots.{}.{key}", p.name), m)
-        };
+        let bad =
+            |key: &str, m: String| src.err(Some(&anchor), key, format!("pots.{}.{key}", p.name), m);
         if out.iter().any(|o| o.name == p.name) {
             return Err(bad("name", "duplicate pots name".into()));
         }
-        let body = body_names.iter().position(|n| *n == p.body).ok_or_else(|| {
-            bad(
-                "body",
-                format!("unknown body `{}` (allowed: {})", p.body, body_names.join(", ")),
-            )
-        })?;
+        let body = body_names
+            .iter()
+            .position(|n| *n == p.body)
+            .ok_or_else(|| {
+                bad(
+                    "body",
+                    format!(
+                        "unknown body `{}` (allowed: {})",
+                        p.body,
+                        body_names.join(", ")
+                    ),
+                )
+            })?;
         let names: Vec<&str> = coordinates.iter().map(|c| c.name.as_str()).collect();
         let level = names.iter().position(|n| *n == p.level).ok_or_else(|| {
             bad(
                 "level",
-                format!("unknown coordinate `{}` (allowed: {})", p.level, names.join(", ")),
+                format!(
+                    "unknown coordinate `{}` (allowed: {})",
+                    p.level,
+                    names.join(", ")
+                ),
             )
         })?;
         if coordinates[level].servo.is_some() {
@@ -186,11 +196,8 @@ fn add_rigid_liquid(carrier: &mut Body, pots: &Pots) {
     let c = pots.rest_level_m;
     let a = pots.axis;
     // (mass, centre, own inertia) of each piece, carrier axes.
-    let mut pieces: Vec<(f64, [f64; 3], [[f64; 3]; 3])> = vec![(
-        carrier.mass_kg,
-        carrier.cg_m,
-        carrier.inertia_kg_m2,
-    )];
+    let mut pieces: Vec<(f64, [f64; 3], [[f64; 3]; 3])> =
+        vec![(carrier.mass_kg, carrier.cg_m, carrier.inertia_kg_m2)];
     let transverse = |m: f64, len: f64| {
         let k = m * len * len / 12.0;
         let mut i = [[0.0; 3]; 3];
@@ -245,7 +252,10 @@ fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 impl Pots {
     /// Length of the connecting tube, m.
     pub fn tube_length_m(&self) -> f64 {
-        self.tube_path_m.windows(2).map(|w| dist(&w[0], &w[1])).sum()
+        self.tube_path_m
+            .windows(2)
+            .map(|w| dist(&w[0], &w[1]))
+            .sum()
     }
     /// ℰ: the inertia of the relative flow, ½ℰu̇² being its kinetic energy (plug flow at the mean
     /// velocity of each section, Beghin §51 (2), (6)): ℰ = ρω₀(2c + ω₀ L/F), kg. Independent of

@@ -56,8 +56,13 @@ pub(super) fn add<T: Real, const N: usize>(
         let m = len * rho_w0;
         let r_body = V3::from_f64(pots.bases_m[j]).add(&a.scale(len * 0.5));
         let x = k.p.add(&k.r.mul_v(&r_body));
-        let jv: [V3<Jet<T, N>>; N] =
-            std::array::from_fn(|i| if i < n { k.jw[i].cross(&x).sub(&k.jm[i]) } else { vz });
+        let jv: [V3<Jet<T, N>>; N] = std::array::from_fn(|i| {
+            if i < n {
+                k.jw[i].cross(&x).sub(&k.jm[i])
+            } else {
+                vz
+            }
+        });
         let v0 = w0.cross(&x);
         let mut v_u = vz;
         for i in 0..n {

@@ -7,8 +7,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use gyro_mcap::contract::{
-    BodyShape, PotsDrawing, bodies_record, compass_state, design_record, events, result_record, run_record,
-    ship_state, status, tf,
+    BodyShape, PotsDrawing, bodies_record, compass_state, design_record, events, result_record,
+    run_record, ship_state, status, tf,
 };
 use gyro_mcap::{Pose, RecordingWriter, Value, WriterOptions};
 
@@ -95,6 +95,18 @@ pub fn write_recording_with_pots(path: &Path, n: usize, rate_hz: f64) {
     write(path, n, rate_hz, true);
 }
 
+/// One compass-state sample: the leading fields, θ (and u), then their rates (zero).
+fn compass_values(t: f64, heading: f64, with_pots: bool) -> Vec<f64> {
+    let err = reading_error(t);
+    let mut v = vec![t, err, heading + err, heading, tilt(t), tilt(t)];
+    if with_pots {
+        v.extend([mercury_level(t), 0.0, 0.0]);
+    } else {
+        v.push(0.0);
+    }
+    v
+}
+
 fn write(path: &Path, n: usize, rate_hz: f64, with_pots: bool) {
     let mut w = RecordingWriter::create(path, WriterOptions::default()).expect("create");
     let coordinates: &[(&str, &str)] = if with_pots {
@@ -119,23 +131,8 @@ fn write(path: &Path, n: usize, rate_hz: f64, with_pots: bool) {
     for i in 0..n {
         let t = i as f64 / rate_hz;
         let ns = (t * 1e9).round() as u64;
-        let err = reading_error(t);
-        let compass: Vec<f64> = if with_pots {
-            vec![
-                t,
-                err,
-                heading + err,
-                heading,
-                tilt(t),
-                tilt(t),
-                mercury_level(t),
-                0.0,
-                0.0,
-            ]
-        } else {
-            vec![t, err, heading + err, heading, tilt(t), tilt(t), 0.0]
-        };
-        w.write_f64_record(c, ns, &compass).expect("compass");
+        w.write_f64_record(c, ns, &compass_values(t, heading, with_pots))
+            .expect("compass");
         let accel = if (300.0..320.0).contains(&t) {
             0.25
         } else {
