@@ -8,8 +8,9 @@ use crate::run::{ManoeuvreEvent, Progress, RunError, RunObserver, RunProbe, RunS
 use crate::scene::Scene;
 use crate::solvers::StopReason;
 use gyro_mcap::contract::{
-    BodyShape, PotsDrawing, attachments, bodies_record, compass_state, design_constants_record, design_record,
-    energy, events, result_record, run_record, scene_record, ship_state, solver_stats, status, tf,
+    BodyShape, PotsDrawing, attachments, bodies_record, compass_state, design_constants_record,
+    design_record, energy, events, result_record, run_record, scene_record, ship_state,
+    solver_stats, status, tf,
 };
 use gyro_mcap::{ChannelId, Pose, RecordingError, RecordingWriter, Value, WriterOptions};
 use gyro_model::constants::{EARTH_RADIUS_M, schuler_period_s};
