@@ -1,0 +1,147 @@
+//! The local engine: a sweep writes one typed row per run into `metrics.parquet`; a stopped
+//! sweep resumes with only the missing runs and ends with the same table; a run that fails is a
+//! `failed` row with its reason.
+
+use crate::common::{HARBOUR, study, tmp};
+use gyro_study::sweep::run_local;
+use gyro_study::table::{self, TIMING_COLUMNS};
+use polars::prelude::*;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+fn no_timing(df: &DataFrame) -> DataFrame {
+    df.drop_many(TIMING_COLUMNS)
+}
+
+#[test]
+fn local_sweep_writes_one_typed_row_per_run() {
+    let p = study(HARBOUR).expect("loads");
+    let out = tmp("local-typed");
+    let stop = Arc::new(AtomicBool::new(false));
+    let s = run_local(&p, &out, 2, &stop, |_, _| {}).expect("sweep");
+    assert_eq!(
+        (s.total_runs, s.ran, s.failed, s.already_done),
+        (6, 6, 0, 0)
+    );
+    let df = table::read_parquet(&table::metrics_path(&out)).expect("table");
+    assert_eq!(df.height(), 6);
+    let idx: Vec<u64> = df["run_index"]
+        .u64()
+        .expect("u64")
+        .into_no_null_iter()
+        .collect();
+    assert_eq!(idx, [0, 1, 2, 3, 4, 5]);
+    assert_eq!(df["start.latitude_deg"].dtype(), &DataType::Float64);
+    assert_eq!(df["period_s"].dtype(), &DataType::Float64);
+    assert_eq!(df["steps"].dtype(), &DataType::UInt64);
+    let status: Vec<&str> = df["status"]
+        .str()
+        .expect("str")
+        .iter()
+        .map(|s| s.unwrap_or(""))
+        .collect();
+    assert!(status.iter().all(|s| *s == "ok"), "{status:?}");
+    // The fitted amplitude follows the release offset (2°, 4°, 6°) at each latitude.
+    let amp: Vec<f64> = df["amplitude_rad"]
+        .f64()
+        .expect("f64")
+        .into_no_null_iter()
+        .collect();
+    assert!(
+        amp[0].abs() < amp[1].abs() && amp[1].abs() < amp[2].abs(),
+        "{amp:?}"
+    );
+    // Nothing half-written or left over: the parts are merged, the work folder gone.
+    assert!(!table::parts_dir(&out).exists());
+    assert!(!gyro_study::exec::work_dir(&out).exists());
+    // A second run finds everything done and runs nothing.
+    let again = run_local(&p, &out, 2, &stop, |_, _| {}).expect("sweep");
+    assert_eq!((again.ran, again.already_done), (0, 6));
+    let same = table::read_parquet(&table::metrics_path(&out)).expect("table");
+    assert!(no_timing(&same).equals_missing(&no_timing(&df)));
+}
+
+#[test]
+fn a_stopped_sweep_resumes_with_the_missing_runs_only_and_the_same_table() {
+    let p = study(HARBOUR).expect("loads");
+    let whole = tmp("resume-whole");
+    let stop = Arc::new(AtomicBool::new(false));
+    run_local(&p, &whole, 2, &stop, |_, _| {}).expect("sweep");
+    let reference = table::read_parquet(&table::metrics_path(&whole)).expect("table");
+
+    let out = tmp("resume-stopped");
+    let stop = Arc::new(AtomicBool::new(false));
+    let first = run_local(&p, &out, 1, &stop, |pr, _| {
+        if pr.finished == 2 {
+            stop.store(true, Ordering::Relaxed);
+        }
+    })
+    .expect("stopped sweep");
+    assert!(first.interrupted);
+    assert_eq!(first.ran, 2);
+    let status = gyro_study::sweep::status(&out).expect("status");
+    assert_eq!((status.ok, status.missing), (2, 4));
+    let go = Arc::new(AtomicBool::new(false));
+    let second = run_local(&p, &out, 2, &go, |_, _| {}).expect("resumed sweep");
+    assert_eq!(
+        (second.ran, second.already_done),
+        (4, 2),
+        "finished runs are not run again"
+    );
+    let resumed = table::read_parquet(&table::metrics_path(&out)).expect("table");
+    assert!(
+        no_timing(&resumed).equals_missing(&no_timing(&reference)),
+        "resumed:\n{resumed}\nuninterrupted:\n{reference}"
+    );
+}
+
+#[test]
+fn a_run_that_diverges_is_a_failed_row_with_its_reason() {
+    let p = study(
+        r#"
+name = "diverging"
+scenes = ["harbour-50n"]
+[[axis]]
+key = "duration_s"
+values = [600.0]
+[[axis]]
+key = "simulation.integrator"
+values = ["rodas4", "rk4:30"]
+[keep]
+recordings = "failed"
+"#,
+    )
+    .expect("loads");
+    let out = tmp("diverging");
+    let stop = Arc::new(AtomicBool::new(false));
+    let s = run_local(&p, &out, 2, &stop, |_, _| {}).expect("the sweep completes");
+    assert_eq!((s.ran, s.failed), (2, 1));
+    let df = table::read_parquet(&table::metrics_path(&out)).expect("table");
+    let status: Vec<&str> = df["status"]
+        .str()
+        .expect("str")
+        .iter()
+        .map(|s| s.unwrap_or(""))
+        .collect();
+    let reason: Vec<&str> = df["reason"]
+        .str()
+        .expect("str")
+        .iter()
+        .map(|s| s.unwrap_or(""))
+        .collect();
+    assert_eq!(status, ["ok", "failed"]);
+    assert!(reason[1].contains("non-finite state"), "{reason:?}");
+    // recordings = "failed": the failed run's recording is kept (salvaged), the other is not.
+    let rec: Vec<&str> = df["recording"]
+        .str()
+        .expect("str")
+        .iter()
+        .map(|s| s.unwrap_or(""))
+        .collect();
+    assert_eq!(rec[0], "");
+    assert!(out.join(rec[1]).is_file(), "{rec:?}");
+    assert!(gyro_mcap::Recording::open(&out.join(rec[1])).is_ok());
+    let st = gyro_study::sweep::status(&out).expect("status");
+    assert_eq!(st.failures.len(), 1);
+    assert!(st.failures[0].1.contains("non-finite"));
+}
