@@ -61,6 +61,15 @@ pub struct Report {
     pub plots: Vec<PathBuf>,
 }
 
+/// The values of the other axes that a line, a fit or a spread is for: (axis, value as text).
+type Group = Vec<(String, String)>;
+
+/// A grid axis's column: its key, its values as text, and as numbers when they are numbers.
+type AxisColumn = (String, Vec<String>, Option<Vec<Option<f64>>>);
+
+/// A line of a plot: x (as a key for grouping) → (x, the metric's values there).
+type Line = BTreeMap<i64, (f64, Vec<f64>)>;
+
 /// Quantile levels of [`Spread::quantiles`].
 pub const QUANTILES: [f64; 5] = [0.05, 0.25, 0.5, 0.75, 0.95];
 
@@ -124,8 +133,9 @@ pub fn fit_fourier(x: &[f64], y: &[f64], order: u32) -> Option<(Vec<f64>, f64)> 
         for r in 0..m {
             if r != col {
                 let f = a[r][col] / a[col][col];
-                for c in col..=m {
-                    a[r][c] -= f * a[col][c];
+                let pivot = a[col].clone();
+                for (x, p) in a[r].iter_mut().zip(&pivot).skip(col) {
+                    *x -= f * p;
                 }
             }
         }
@@ -171,7 +181,7 @@ pub fn report(out: &Path) -> Result<Report, String> {
     let scene = str_column(&df, "scene").unwrap_or_default();
     let design = str_column(&df, "design").unwrap_or_default();
     // Grid axes that vary, with their values as text (group keys) and as numbers (x).
-    let grid: Vec<(String, Vec<String>, Option<Vec<Option<f64>>>)> = study
+    let grid: Vec<AxisColumn> = study
         .grid
         .iter()
         .map(|a| {
@@ -185,7 +195,7 @@ pub fn report(out: &Path) -> Result<Report, String> {
         .collect();
     let several_scenes = study.scenes.len() > 1;
     let several_designs = study.designs.len() > 1;
-    let group_of = |i: usize, except: Option<&str>| -> Vec<(String, String)> {
+    let group_of = |i: usize, except: Option<&str>| -> Group {
         let mut g = Vec::new();
         if several_scenes {
             g.push(("scene".to_string(), scene[i].clone()));
@@ -215,7 +225,7 @@ pub fn report(out: &Path) -> Result<Report, String> {
         let Some((_, _, Some(x))) = grid.iter().find(|(n, _, _)| *n == h.axis) else {
             continue;
         };
-        let mut groups: BTreeMap<Vec<(String, String)>, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
+        let mut groups: BTreeMap<Group, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
         for &i in &ok_rows {
             if let (Some(xi), Some(yi)) = (x[i], y[i]) {
                 let e = groups.entry(group_of(i, Some(&h.axis))).or_default();
@@ -251,7 +261,7 @@ pub fn report(out: &Path) -> Result<Report, String> {
             let Some(y) = f64_column(&df, m) else {
                 continue;
             };
-            let mut groups: BTreeMap<Vec<(String, String)>, Vec<f64>> = BTreeMap::new();
+            let mut groups: BTreeMap<Group, Vec<f64>> = BTreeMap::new();
             for &i in &ok_rows {
                 if let Some(v) = y[i] {
                     groups.entry(group_of(i, None)).or_default().push(v);
@@ -279,15 +289,14 @@ pub fn report(out: &Path) -> Result<Report, String> {
         .iter()
         .copied()
         .filter(|m| !m.contains("sigma"))
+        .filter(|m| f64_column(&df, m).is_some_and(|c| c.iter().any(Option::is_some)))
         .take(6)
         .collect();
-    let mut header: Vec<String> = group_of(0.min(n.saturating_sub(1)), None)
-        .into_iter()
-        .map(|(k, _)| k)
-        .collect();
-    if n == 0 {
-        header.clear();
-    }
+    let header: Vec<String> = if n == 0 {
+        Vec::new()
+    } else {
+        group_of(0, None).into_iter().map(|(k, _)| k).collect()
+    };
     let mut columns = header.clone();
     columns.push("ok".into());
     columns.extend(shown.iter().map(|m| (*m).clone()));
@@ -296,9 +305,18 @@ pub fn report(out: &Path) -> Result<Report, String> {
         .iter()
         .map(|m| f64_column(&df, m).unwrap_or_else(|| vec![None; n]))
         .collect();
-    let mut points: BTreeMap<Vec<(String, String)>, Vec<usize>> = BTreeMap::new();
+    // Grid points in run-index order (the table's), not sorted as text.
+    let mut points: Vec<(Group, Vec<usize>)> = Vec::new();
+    let mut seen: BTreeMap<Group, usize> = BTreeMap::new();
     for i in 0..n {
-        points.entry(group_of(i, None)).or_default().push(i);
+        let g = group_of(i, None);
+        match seen.get(&g) {
+            Some(&k) => points[k].1.push(i),
+            None => {
+                seen.insert(g.clone(), points.len());
+                points.push((g, vec![i]));
+            }
+        }
     }
     for (g, rows) in &points {
         let ok: Vec<usize> = rows.iter().copied().filter(|&i| status[i] == OK).collect();
@@ -334,8 +352,7 @@ pub fn report(out: &Path) -> Result<Report, String> {
         };
         if let Some((xname, _, Some(x))) = xaxis {
             // Lines: mean over samples against the first numeric axis, one per other group.
-            let mut lines: BTreeMap<Vec<(String, String)>, BTreeMap<i64, (f64, Vec<f64>)>> =
-                BTreeMap::new();
+            let mut lines: BTreeMap<Group, Line> = BTreeMap::new();
             for &i in &ok_rows {
                 if let (Some(xi), Some(yi)) = (x[i], y[i]) {
                     lines
@@ -408,7 +425,7 @@ pub fn report(out: &Path) -> Result<Report, String> {
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
                     (a.min(*x), b.max(*x))
                 });
-            if !(hi > lo) {
+            if hi <= lo {
                 continue;
             }
             let bins = ((v.len() as f64).sqrt().ceil() as usize).clamp(5, 40);

@@ -665,15 +665,13 @@ fn grid_axis(a: &AxisFile, k: usize, src: &Src) -> Result<GridAxis, InputError> 
             }
             (0..n)
                 .map(|i| {
-                    let f = if n == 1 {
-                        0.0
-                    } else {
-                        i as f64 / (n - 1) as f64
-                    };
+                    let steps = (n - 1).max(1) as f64;
+                    // (x1 − x0)·i/(n − 1): exact for round steps (0 … 75 by 5 gives 55, not
+                    // 54.999…).
                     let x = if log {
-                        (x0.ln() + f * (x1.ln() - x0.ln())).exp()
+                        (x0.ln() + (x1.ln() - x0.ln()) * i as f64 / steps).exp()
                     } else {
-                        x0 + f * (x1 - x0)
+                        x0 + (x1 - x0) * i as f64 / steps
                     };
                     // The ends exactly as written.
                     let x = if i == 0 {

@@ -1,7 +1,9 @@
 //! The shipped studies reproduce known physics: the Anschütz's rolling error is a sin 2Δ against
 //! heading whose amplitude follows ½ sinΔ cosΔ (J₀/g)² aP/τ over roll periods of 5–15 s, and the
 //! damped periods and latitude errors of the Anschütz and the Sperry follow their characteristic
-//! equations and eq. 18 / eq. 10 at every latitude from 0 to 75°N.
+//! equations (periods within 1 % wherever gyro-analysis fits one: where the damping ratio passes
+//! ≈ 0.45, above 55°N for the Anschütz and 70°N for the Sperry, the release leaves one overshoot
+//! and the fit refuses it as aperiodic) and eq. 18 / eq. 10 at every latitude from 0 to 75°N.
 
 use crate::common::tmp;
 use gyro_model::constants::EARTH_RATE_RAD_PER_S;
@@ -46,7 +48,7 @@ fn column(df: &polars::prelude::DataFrame, name: &str) -> Vec<f64> {
 #[test]
 fn anschutz_rolling_error_is_the_closed_form_sin_2_delta() {
     let plan = shipped("anschutz-rolling");
-    assert_eq!(plan.total_runs(), 60);
+    assert_eq!(plan.total_runs(), 40);
     let out = sweep(&plan, "shipped-rolling");
     let r = report::report(&out).expect("the report");
     assert_eq!(r.harmonics.len(), 5, "one fit per roll period");
@@ -59,7 +61,7 @@ fn anschutz_rolling_error_is_the_closed_form_sin_2_delta() {
             .expect("the group's roll period");
         // The closed form from the run's own numbers.
         let index = (0..plan.total_runs())
-            .find(|&i| plan.run(i).values[1].as_float() == Some(period))
+            .find(|&i| plan.run(i).values[3].as_float() == Some(period))
             .expect("a run at this period");
         let scene = plan.scene(&plan.run(index)).expect("scene");
         let d = &scene.design;
@@ -99,7 +101,14 @@ fn damped_periods_and_latitude_errors_follow_theory_at_every_latitude() {
         let lat = column(&df, "start.latitude_deg");
         let period = column(&df, "period_s");
         let steady = column(&df, "steady_error_rad");
+        let quality: Vec<String> = df["azimuth_quality"]
+            .str()
+            .expect("str")
+            .iter()
+            .map(|s| s.unwrap_or("").to_string())
+            .collect();
         assert_eq!(lat.len(), 16);
+        let mut fitted = 0;
         for (i, l) in lat.iter().enumerate() {
             let scene = plan.scene(&plan.run(i as u64)).expect("scene");
             let d = &scene.design;
@@ -129,6 +138,23 @@ fn damped_periods_and_latitude_errors_follow_theory_at_every_latitude() {
                 (th.characteristic_roots()[0], e)
             };
             let t_d = std::f64::consts::TAU / root.1.abs();
+            // The slow pair's damping ratio: past ≈ 0.45 the second extreme of the release is
+            // under 3 % of the swing, below the fit's hysteresis, and gyro-analysis refuses the
+            // period as aperiodic instead of guessing it.
+            let zeta = -root.0 / root.0.hypot(root.1);
+            if quality[i] != "ok" {
+                println!(
+                    "{name} {l:4.1}°N: period refused ({}), damping ratio {zeta:.3}",
+                    quality[i]
+                );
+                assert!(
+                    zeta > 0.45 && quality[i] == "aperiodic",
+                    "{name} at {l}°N: the fit refused ({}) at a damping ratio of {zeta:.3}",
+                    quality[i]
+                );
+            } else {
+                fitted += 1;
+            }
             println!(
                 "{name} {l:4.1}°N: period {:.1} s vs {t_d:.1} s ({:+.3} %), latitude error {:.4}° vs {:.4}°",
                 period[i],
@@ -137,7 +163,7 @@ fn damped_periods_and_latitude_errors_follow_theory_at_every_latitude() {
                 error.to_degrees()
             );
             assert!(
-                (period[i] / t_d - 1.0).abs() < 0.01,
+                quality[i] != "ok" || (period[i] / t_d - 1.0).abs() < 0.01,
                 "{name} at {l}°N: fitted period {:.1} s vs the slow roots' {t_d:.1} s",
                 period[i]
             );
@@ -148,5 +174,7 @@ fn damped_periods_and_latitude_errors_follow_theory_at_every_latitude() {
                 error.to_degrees()
             );
         }
+        // 0–55°N for the Anschütz, 0–70°N for the Sperry.
+        assert!(fitted >= 12, "{name}: only {fitted} periods fitted");
     }
 }
