@@ -217,22 +217,22 @@ fn partial_files(dir: &Path) -> Vec<PathBuf> {
     found
 }
 
-/// Six one-hour harbour runs: seconds each.
+/// Six one-hour rolling runs: about a second each, so the driver can be killed mid-sweep.
 const STUDY: &str = r#"
-name = "ray-harbour"
-scenes = ["harbour-50n"]
+name = "ray-rolling"
+scenes = ["rolling-intercardinal"]
 
 [[axis]]
 key = "duration_s"
 values = [3600.0]
 
 [[axis]]
-key = "start.latitude_deg"
-values = [20.0, 40.0, 60.0]
+key = "start.heading_deg"
+values = [30.0, 60.0, 120.0]
 
 [[axis]]
-key = "compass.azimuth_offset_deg"
-values = [3.0, 6.0]
+key = "sea.roll_period_s"
+values = [8.0, 10.0]
 
 [keep]
 recordings = "every:3"
@@ -343,6 +343,7 @@ fn ray_engine_on_a_local_cluster_matches_local_survives_kills_and_resumes() {
         })
         .expect("the task's worker");
     signal("KILL", &[worker]);
+    println!("killed Ray worker {worker} (running gyrolab {exec_pid}) mid-task");
     let out = sweep.wait_with_output().unwrap();
     assert!(
         out.status.success(),
@@ -422,6 +423,7 @@ fn ray_engine_on_a_local_cluster_matches_local_survives_kills_and_resumes() {
         },
     );
     let done_before = gyro_study::sweep::status(&resumed).unwrap().ok;
+    println!("driver killed with {done_before} of 6 runs done");
     let out = succeed(
         cluster
             .gyrolab()
