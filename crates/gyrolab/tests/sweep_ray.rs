@@ -265,7 +265,7 @@ fn wait_for<T>(what: &str, limit: Duration, mut f: impl FnMut() -> Option<T>) ->
 
 #[test]
 fn ray_engine_on_a_local_cluster_matches_local_survives_kills_and_resumes() {
-    let Some(python) = gyro_testkit::venv("ray-venv", &[gyro_testkit::RAY]) else {
+    let Some(python) = gyro_testkit::venv("sweep-venv", &gyro_testkit::SWEEP) else {
         return;
     };
     let dir = tmp("sweep", "ray");
@@ -312,6 +312,31 @@ fn ray_engine_on_a_local_cluster_matches_local_survives_kills_and_resumes() {
         assert!(on_ray.join(format!("recordings/run-{i:09}.mcap")).is_file());
     }
     assert!(partial_files(&on_ray).is_empty());
+    // pandas (through pyarrow) reads the table with its types.
+    let read = Command::new(&python)
+        .arg("-c")
+        .arg(
+            "import sys, pandas, pyarrow.parquet as pq\n\
+             t = pq.read_table(sys.argv[1]); df = pandas.read_parquet(sys.argv[1])\n\
+             print(len(df), t.schema.field('run_index').type, t.schema.field('start.heading_deg').type, \
+             t.schema.field('rolling_error_rad').type, t.schema.field('status').type, list(df['status']).count('ok'))",
+        )
+        .arg(gyro_study::table::metrics_path(&on_ray))
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&read.stdout);
+    assert!(
+        read.status.success(),
+        "{}",
+        String::from_utf8_lossy(&read.stderr)
+    );
+    let f: Vec<&str> = text.split_whitespace().collect();
+    assert_eq!(
+        (f[0], f[1], f[2], f[3], f[5]),
+        ("6", "uint64", "double", "double", "6"),
+        "{text}"
+    );
+    assert!(f[4].contains("string"), "{text}");
 
     // 2. A worker killed mid-task: the task is retried, the sweep completes, nothing is left.
     let killed = dir.join("killed");
