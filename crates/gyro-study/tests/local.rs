@@ -145,3 +145,63 @@ recordings = "failed"
     assert_eq!(st.failures.len(), 1);
     assert!(st.failures[0].1.contains("non-finite"));
 }
+
+#[test]
+fn a_monte_carlo_report_gives_spreads_quantiles_and_a_histogram() {
+    let p = study(
+        r#"
+name = "mc-harbour"
+scenes = ["harbour-50n"]
+[[axis]]
+key = "duration_s"
+values = [10800.0]
+[monte_carlo]
+samples = 24
+seed = 3
+[[random]]
+key = "compass.azimuth_offset_deg"
+distribution = "normal"
+mean = 0.0
+std = 4.0
+[keep]
+metrics = ["amplitude_rad", "period_s"]
+"#,
+    )
+    .expect("loads");
+    let out = tmp("mc-report");
+    run_local(&p, &out, 2, &Arc::new(AtomicBool::new(false)), |_, _| {}).expect("sweep");
+    let r = gyro_study::report::report(&out).expect("report");
+    let amp = r
+        .spreads
+        .iter()
+        .find(|s| s.metric == "amplitude_rad")
+        .expect("the amplitude's spread");
+    assert_eq!(amp.n, 24);
+    assert!(amp.quantiles.windows(2).all(|w| w[0] <= w[1]), "{amp:?}");
+    // The fitted amplitude is proportional to |release offset| (the linear regime; the table's
+    // own axis column): its spread over the samples is the offsets' spread, scaled alike.
+    let df = table::read_parquet(&table::metrics_path(&out)).expect("table");
+    let off: Vec<f64> = df["compass.azimuth_offset_deg"]
+        .f64()
+        .expect("f64")
+        .iter()
+        .map(|v| v.unwrap_or(f64::NAN).to_radians().abs())
+        .collect();
+    let m = off.iter().sum::<f64>() / off.len() as f64;
+    let sd = (off.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (off.len() - 1) as f64).sqrt();
+    let k = amp.mean / m;
+    assert!(
+        (amp.std / (k * sd) - 1.0).abs() < 0.05,
+        "{} vs {k} × {sd}",
+        amp.std
+    );
+    // The period does not depend on the offset (linear regime): a narrow spread.
+    let per = r
+        .spreads
+        .iter()
+        .find(|s| s.metric == "period_s")
+        .expect("period");
+    assert!(per.std < 1e-3 * per.mean, "{per:?}");
+    assert!(out.join("report/amplitude_rad-histogram.svg").is_file());
+    assert!(r.render().contains("Spreads over the Monte Carlo samples"));
+}
