@@ -54,6 +54,8 @@ pub struct Report {
     pub rows: usize,
     pub ok: usize,
     pub failed: usize,
+    /// Axes of one value (they set the study's scenes; no column of the summary).
+    pub fixed: Vec<(String, String)>,
     pub harmonics: Vec<HarmonicFit>,
     pub spreads: Vec<Spread>,
     /// The table of grid points (Markdown).
@@ -66,6 +68,9 @@ type Group = Vec<(String, String)>;
 
 /// A grid axis's column: its key, its values as text, and as numbers when they are numbers.
 type AxisColumn = (String, Vec<String>, Option<Vec<Option<f64>>>);
+
+/// A harmonic fit's data for one group: its first row, the angles (rad), the metric's values.
+type FitData = (usize, Vec<f64>, Vec<f64>);
 
 /// A line of a plot: x (as a key for grouping) → (x, the metric's values there).
 type Line = BTreeMap<i64, (f64, Vec<f64>)>;
@@ -203,8 +208,9 @@ pub fn report(out: &Path) -> Result<Report, String> {
         if several_designs {
             g.push(("design".to_string(), design[i].clone()));
         }
-        for (name, text, _) in &grid {
-            if Some(name.as_str()) != except {
+        // Axes of one value set the study, they tell no group apart.
+        for ((name, text, _), a) in grid.iter().zip(&study.grid) {
+            if Some(name.as_str()) != except && a.values.len() > 1 {
                 g.push((name.clone(), text[i].clone()));
             }
         }
@@ -225,15 +231,21 @@ pub fn report(out: &Path) -> Result<Report, String> {
         let Some((_, _, Some(x))) = grid.iter().find(|(n, _, _)| *n == h.axis) else {
             continue;
         };
-        let mut groups: BTreeMap<Group, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
+        // Per group: its first row (the fits come in run-index order), the angles, the values.
+        let mut groups: BTreeMap<Group, FitData> = BTreeMap::new();
         for &i in &ok_rows {
             if let (Some(xi), Some(yi)) = (x[i], y[i]) {
-                let e = groups.entry(group_of(i, Some(&h.axis))).or_default();
-                e.0.push(radians(&h.axis, xi));
-                e.1.push(yi);
+                let e =
+                    groups
+                        .entry(group_of(i, Some(&h.axis)))
+                        .or_insert((i, Vec::new(), Vec::new()));
+                e.1.push(radians(&h.axis, xi));
+                e.2.push(yi);
             }
         }
-        for (group, (xs, ys)) in groups {
+        let mut groups: Vec<(Group, FitData)> = groups.into_iter().collect();
+        groups.sort_by_key(|(_, (first, _, _))| *first);
+        for (group, (_, xs, ys)) in groups {
             if let Some((c, rms)) = fit_fourier(&xs, &ys, h.order) {
                 let k = 2 * h.order as usize;
                 let (a, b) = (c[k - 1], c[k]);
@@ -465,6 +477,12 @@ pub fn report(out: &Path) -> Result<Report, String> {
         rows: n,
         ok: ok_rows.len(),
         failed: n - ok_rows.len(),
+        fixed: study
+            .grid
+            .iter()
+            .filter(|a| a.values.len() == 1)
+            .map(|a| (a.key.name.clone(), a.values[0].to_string()))
+            .collect(),
         harmonics,
         spreads,
         summary_markdown,
@@ -479,8 +497,20 @@ pub fn report(out: &Path) -> Result<Report, String> {
 impl Report {
     /// The report as text (Markdown tables).
     pub fn render(&self) -> String {
+        let fixed = if self.fixed.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "for every run: {}\n\n",
+                self.fixed
+                    .iter()
+                    .map(|(k, v)| format!("{k} = {v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        };
         let mut s = format!(
-            "# {}: {} of {} runs in the table, {} ok, {} failed\n\n{}\n",
+            "# {}: {} of {} runs in the table, {} ok, {} failed\n\n{fixed}{}\n",
             self.study, self.rows, self.total_runs, self.ok, self.failed, self.summary_markdown
         );
         if !self.harmonics.is_empty() {
