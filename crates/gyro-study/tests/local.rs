@@ -205,3 +205,40 @@ metrics = ["amplitude_rad", "period_s"]
     assert!(out.join("report/amplitude_rad-histogram.svg").is_file());
     assert!(r.render().contains("Spreads over the Monte Carlo samples"));
 }
+
+#[test]
+fn a_combination_the_scene_refuses_is_a_failed_row_not_a_crashed_sweep() {
+    // Each value loads alone (89.5°N moored; 30 kn at 50°N), but 30 kn North from 89.5°N
+    // reaches the pole within the run: that run's scene is refused, the others run.
+    let p = study(
+        r#"
+name = "pole"
+scenes = ["harbour-50n"]
+[[axis]]
+key = "duration_s"
+values = [3600.0]
+[[axis]]
+key = "start.latitude_deg"
+values = [10.0, 89.5]
+[[axis]]
+key = "start.speed_kn"
+values = [0.0, 30.0]
+"#,
+    )
+    .expect("every value loads alone");
+    let out = tmp("pole");
+    let s = run_local(&p, &out, 2, &Arc::new(AtomicBool::new(false)), |_, _| {}).expect("sweep");
+    assert_eq!((s.ran, s.failed), (4, 1));
+    let df = table::read_parquet(&table::metrics_path(&out)).expect("table");
+    let reason: Vec<&str> = df["reason"]
+        .str()
+        .expect("str")
+        .iter()
+        .map(|s| s.unwrap_or(""))
+        .collect();
+    assert!(
+        reason[3].starts_with("bad scene:") && reason[3].contains("pole"),
+        "{reason:?}"
+    );
+    assert!(reason[..3].iter().all(|r| r.is_empty()), "{reason:?}");
+}
