@@ -197,3 +197,57 @@ fn bad_studies_and_arguments_exit_2_before_any_run() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
 }
+
+#[test]
+fn ctrl_c_stops_a_local_sweep_with_130_keeping_what_finished_and_a_rerun_finishes_it() {
+    let dir = tmp("sweep", "ctrl-c");
+    let study = write(
+        &dir,
+        "rolling.toml",
+        r#"
+name = "ctrl-c"
+scenes = ["rolling-intercardinal"]
+[[axis]]
+key = "duration_s"
+values = [3600.0]
+[[axis]]
+key = "start.heading_deg"
+values = [0.0, 30.0, 60.0, 90.0, 120.0, 150.0]
+"#,
+    );
+    let out = dir.join("out");
+    let child = gyrolab()
+        .args(["sweep", "run", &study, "--out"])
+        .arg(&out)
+        .args(["--jobs", "1", "--quiet"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Six runs of about a second each on one thread: stopped well before the end.
+    std::thread::sleep(std::time::Duration::from_millis(2500));
+    let _ = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(130),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let st = succeed(gyrolab().args(["sweep", "status"]).arg(&out).arg("--json"));
+    let st: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
+    let done = st["ok"].as_u64().unwrap();
+    assert!(done < 6, "{st}");
+    assert_eq!(done + st["missing"].as_u64().unwrap(), 6, "{st}");
+    let again = succeed(
+        gyrolab()
+            .args(["sweep", "run", &study, "--out"])
+            .arg(&out)
+            .args(["--json", "--quiet"]),
+    );
+    let s: serde_json::Value = serde_json::from_slice(&again.stdout).unwrap();
+    assert_eq!(s["already_done"].as_u64(), Some(done), "{s}");
+    assert_eq!(s["ran"].as_u64(), Some(6 - done), "{s}");
+}
