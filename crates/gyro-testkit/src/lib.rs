@@ -26,6 +26,15 @@ pub const PROTOBUF: &str = "protobuf==7.36.2";
 /// Rerun's Python SDK at the version of the `rerun` crate the workspace builds against.
 pub const RERUN_SDK: &str = "rerun-sdk==0.36.3";
 
+/// Ray, pinned: the engine of `gyrolab sweep run --engine ray` (its tests start a local cluster).
+pub const RAY: &str = "ray==2.60.0";
+/// pyarrow and pandas: a sweep's `metrics.parquet` must read there too.
+pub const PYARROW: &str = "pyarrow==26.0.1";
+pub const PANDAS: &str = "pandas==3.1.1";
+
+/// Everything the sweep tests install, in one venv.
+pub const SWEEP: [&str; 3] = [RAY, PYARROW, PANDAS];
+
 /// Everything the interop tests install, in one venv.
 pub const INTEROP: [&str; 4] = [MCAP, MCAP_PROTOBUF_SUPPORT, PROTOBUF, RERUN_SDK];
 

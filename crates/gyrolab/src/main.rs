@@ -4,6 +4,7 @@
 //! 130 interrupted by Ctrl-C (the recording is still closed and valid).
 
 mod commands;
+mod sweep;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -141,6 +142,9 @@ enum Command {
         #[arg(long)]
         list: bool,
     },
+    /// Design studies: grids and Monte Carlo samples of scenes and designs, on every core or
+    /// on a Ray cluster, metrics as Parquet (plan, run, status, report).
+    Sweep(sweep::SweepArgs),
 }
 
 fn main() -> ExitCode {
@@ -193,6 +197,7 @@ fn main() -> ExitCode {
             methods,
             list,
         }),
+        Command::Sweep(cmd) => sweep::sweep(cmd),
     };
     match result {
         Ok(code) => code,

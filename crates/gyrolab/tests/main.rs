@@ -7,3 +7,5 @@ mod common;
 mod analysis_physics;
 mod cli;
 mod kill_recover;
+mod sweep_cli;
+mod sweep_ray;
