@@ -7,7 +7,7 @@
 
 use crate::common::tmp;
 use gyro_model::constants::EARTH_RATE_RAD_PER_S;
-use gyro_model::theory::{Anschutz, Sperry1911, rolling_error_magnitude_rad};
+use gyro_model::theory::{Anschutz, Slough, Sperry1911, rolling_error_magnitude_rad};
 use gyro_study::sweep::run_local;
 use gyro_study::{Plan, Study, report, table};
 use std::path::Path;
@@ -94,7 +94,7 @@ fn anschutz_rolling_error_is_the_closed_form_sin_2_delta() {
 
 #[test]
 fn damped_periods_and_latitude_errors_follow_theory_at_every_latitude() {
-    for (name, sperry) in [("anschutz-latitude", false), ("sperry-latitude", true)] {
+    for name in ["anschutz-latitude", "sperry-latitude", "slough-latitude"] {
         let plan = shipped(name);
         let out = sweep(&plan, name);
         let df = table::read_parquet(&table::metrics_path(&out)).expect("table");
@@ -113,12 +113,15 @@ fn damped_periods_and_latitude_errors_follow_theory_at_every_latitude() {
             let scene = plan.scene(&plan.run(i as u64)).expect("scene");
             let d = &scene.design;
             let lr = l.to_radians();
-            let (root, error) = if sperry {
+            let (root, error) = if name == "sperry-latitude" {
                 let th = Sperry1911::from_design(d, lr).expect("the Sperry's parameters");
                 (
                     th.characteristic_roots()[0],
                     th.latitude_error() - th.small_spin_momentum / th.spin_momentum,
                 )
+            } else if name == "slough-latitude" {
+                let th = Slough::from_design(d, lr).expect("the Slough's parameters");
+                (th.compass_roots()[0], th.latitude_error())
             } else {
                 let th = Anschutz {
                     spin_momentum: d.parameter("spin_momentum_n_m_s").expect("IΩ"),
