@@ -182,7 +182,7 @@ fn trunnion_friction_holds_the_nutation() {
     let lat = 35.0;
     let fastest = |overrides: &[(&str, f64)]| {
         let m = compile(design(lat, overrides), lat);
-        *sorted_modes(&m).last().unwrap()
+        *sorted_modes(&m).last().expect("modes")
     };
     let free = fastest(&[("trunnion_damper_n_m_s_per_rad", 0.0)]);
     assert!(
