@@ -634,6 +634,18 @@ fn seed(u_in: &[f64], y_in: &[f64], opts: &FitOptions) -> Result<Seed, (Quality,
             .map(|(a, b)| (b - ct - dt * a).abs())
             .fold(0.0, f64::max);
         let settled = slopes[7].abs() < 0.15 * steepest && tail_spread < 0.1 * range + 4.0 * noise;
+        // A release damped past ζ ≈ 0.45 leaves one overshoot above the hysteresis and its
+        // second extreme under it (under 3 % of the swing). On clean data a reversal well above
+        // the noise is still a turning point: look again with the finer hysteresis before
+        // calling the response aperiodic. An overdamped response has no second reversal at any
+        // hysteresis, so it is still refused.
+        let fine = (8.0 * noise).max(1e-3 * range);
+        if settled && pivots.len() == 1 && fine < h {
+            let pivots = turning_points(&y, fine);
+            if pivots.len() >= 2 {
+                return seed_from_pivots(&u, &y, &pivots, opts);
+            }
+        }
         refusal = if settled && range > 20.0 * noise {
             (
                 Quality::Aperiodic,

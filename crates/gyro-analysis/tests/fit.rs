@@ -170,6 +170,35 @@ fn low_snr_reports_a_wide_but_honest_uncertainty() {
     );
 }
 
+/// A release damped at ζ = 0.5–0.7 overshoots once and turns a second time under 3 % of the
+/// swing: the fit still finds its period and decrement (clean data), as Beghin's damped
+/// compasses at high latitude need.
+#[test]
+fn fits_a_heavily_damped_release() {
+    let t: Vec<f64> = (0..21_600).map(|i| i as f64).collect();
+    for zeta in [0.5, 0.6, 0.7] {
+        let period = 5000.0;
+        let w = std::f64::consts::TAU / period;
+        let sigma = zeta * w / (1.0 - zeta * zeta).sqrt();
+        // Released from rest: x(0) = A, ẋ(0) = 0.
+        let x: Vec<f64> = t
+            .iter()
+            .map(|&t| {
+                -0.02 + 0.08 * (-sigma * t).exp() * ((w * t).cos() + sigma / w * (w * t).sin())
+            })
+            .collect();
+        let fit = fit_damped_sinusoid(&t, &x, &FitOptions::default());
+        assert_eq!(fit.quality, Quality::Ok, "ζ = {zeta}: {}", fit.message);
+        let p = fit.period_s.expect("period").value;
+        let decrement = fit.log_decrement.expect("decrement").value;
+        assert!((p / period - 1.0).abs() < 1e-3, "ζ = {zeta}: period {p}");
+        assert!(
+            (decrement / (sigma * period) - 1.0).abs() < 1e-3,
+            "ζ = {zeta}: decrement {decrement}"
+        );
+    }
+}
+
 #[test]
 fn refuses_an_overdamped_response() {
     // Critically damped and overdamped: x = c + A(1 + t/τ)e^{−t/τ}, and two exponentials.
