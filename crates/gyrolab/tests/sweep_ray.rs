@@ -32,6 +32,19 @@ fn free_port() -> u16 {
         .expect("a free loopback port")
 }
 
+/// `n` distinct free loopback ports, none in `avoid`: Ray refuses to start when a component's
+/// port falls inside the worker port range (seen once in CI: the runtime-env agent's).
+fn free_ports(n: usize, avoid: std::ops::RangeInclusive<u16>) -> Vec<u16> {
+    let mut ports = Vec::with_capacity(n);
+    while ports.len() < n {
+        let p = free_port();
+        if !avoid.contains(&p) && !ports.contains(&p) {
+            ports.push(p);
+        }
+    }
+    ports
+}
+
 /// Process ids whose command line contains `needle`, and their descendants.
 fn processes_with(needle: &str) -> Vec<u32> {
     let mut all: Vec<(u32, u32, String)> = Vec::new();
@@ -100,7 +113,9 @@ impl Cluster {
         // A short private temp dir: Ray's socket paths must fit in 107 bytes.
         let temp_dir = PathBuf::from(format!("/tmp/gyrolab-ray-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&temp_dir);
-        let port = free_port();
+        let worker_low = free_port().clamp(20000, 60000);
+        let ports = free_ports(7, worker_low..=worker_low + 200);
+        let port = ports[0];
         let cluster = Cluster {
             ray: bin.join("ray"),
             python: python.to_path_buf(),
@@ -108,7 +123,6 @@ impl Cluster {
             address: format!("127.0.0.1:{port}"),
             token,
         };
-        let worker_low = free_port().clamp(20000, 60000);
         let started = Instant::now();
         let out = cluster
             .command(&cluster.ray)
@@ -123,12 +137,12 @@ impl Cluster {
             .args(["--include-dashboard=false", "--disable-usage-stats"])
             .arg(format!("--min-worker-port={worker_low}"))
             .arg(format!("--max-worker-port={}", worker_low + 200))
-            .arg(format!("--dashboard-agent-listen-port={}", free_port()))
-            .arg(format!("--dashboard-agent-grpc-port={}", free_port()))
-            .arg(format!("--runtime-env-agent-port={}", free_port()))
-            .arg(format!("--metrics-export-port={}", free_port()))
-            .arg(format!("--node-manager-port={}", free_port()))
-            .arg(format!("--object-manager-port={}", free_port()))
+            .arg(format!("--dashboard-agent-listen-port={}", ports[1]))
+            .arg(format!("--dashboard-agent-grpc-port={}", ports[2]))
+            .arg(format!("--runtime-env-agent-port={}", ports[3]))
+            .arg(format!("--metrics-export-port={}", ports[4]))
+            .arg(format!("--node-manager-port={}", ports[5]))
+            .arg(format!("--object-manager-port={}", ports[6]))
             .output()
             .expect("ray start runs");
         println!("ray start --head: {:.1} s", started.elapsed().as_secs_f64());
