@@ -141,12 +141,7 @@ pub fn evaluate<T: Real, const N: usize>(
     debug_assert!(N > n);
     type S<T, const N: usize> = Jet<T, N>;
     let zero = S::<T, N>::zero();
-    let q: [S<T, N>; N] = Jet::variables(inp.q, n);
-    let base_r = M3(inp
-        .world_from_base
-        .0
-        .map(|row| row.map(|x| embed_time::<T, N>(x, n))));
-    let w0 = V3(inp.base_rate.0.map(|x| embed_time::<T, N>(x, n)));
+    let (q, base_r, w0) = variables::<T, N>(inp, n);
 
     let mut p2 = [zero; N];
     let mut b = [zero; N];
@@ -253,6 +248,23 @@ pub fn evaluate<T: Real, const N: usize>(
             out.k[i * n + k] -= p2[i].d[k] + b[i].d[k] - b[k].d[i];
         }
     }
+}
+
+/// The coordinates as dual variables (directions 0..n, time at n), and the base's rotation
+/// and rate with their time derivatives in direction n.
+#[allow(clippy::type_complexity)]
+#[inline(always)]
+fn variables<T: Real, const N: usize>(
+    inp: &EvalInput<T>,
+    n: usize,
+) -> ([Jet<T, N>; N], M3<Jet<T, N>>, V3<Jet<T, N>>) {
+    let q: [Jet<T, N>; N] = Jet::variables(inp.q, n);
+    let base_r = M3(inp
+        .world_from_base
+        .0
+        .map(|row| row.map(|x| embed_time::<T, N>(x, n))));
+    let w0 = V3(inp.base_rate.0.map(|x| embed_time::<T, N>(x, n)));
+    (q, base_r, w0)
 }
 
 /// One body's rotation, joint position and velocity Jacobian columns, from its parent's (already

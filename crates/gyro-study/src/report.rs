@@ -167,6 +167,73 @@ fn quantile(sorted: &[f64], q: f64) -> f64 {
     sorted[i] * (1.0 - f) + sorted[j] * f
 }
 
+/// Mean over the samples against x, one line per group (at most 12).
+fn lines_figure(title: &str, xname: &str, m: &str, lines: &BTreeMap<Group, Line>) -> Figure {
+    let mut f = Figure::new(title, xname, m);
+    for (k, (g, pts)) in lines.iter().enumerate().take(12) {
+        let name = if g.is_empty() {
+            m.to_owned()
+        } else {
+            g.iter()
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let (xs, ys): (Vec<f64>, Vec<f64>) = pts
+            .values()
+            .map(|(x, v)| (*x, v.iter().sum::<f64>() / v.len() as f64))
+            .unzip();
+        f.series.push(Series {
+            name,
+            x: xs,
+            y: ys,
+            color: PALETTE[k % PALETTE.len()],
+            dashed: false,
+            width_px: 2.0,
+        });
+    }
+    f
+}
+
+/// A histogram of the samples `v` of metric `m` (√n bins, 5–40); `None` with fewer than two
+/// samples or no spread.
+fn histogram(study: &str, m: &str, v: &[f64]) -> Option<Figure> {
+    if v.len() < 2 {
+        return None;
+    }
+    let (lo, hi) = v
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(*x), b.max(*x))
+        });
+    if hi <= lo {
+        return None;
+    }
+    let bins = ((v.len() as f64).sqrt().ceil() as usize).clamp(5, 40);
+    let w = (hi - lo) / bins as f64;
+    let mut counts = vec![0.0; bins];
+    for x in v {
+        counts[(((x - lo) / w) as usize).min(bins - 1)] += 1.0;
+    }
+    let (mut xs, mut ys) = (vec![lo], vec![0.0]);
+    for (k, c) in counts.iter().enumerate() {
+        xs.extend([lo + k as f64 * w, lo + (k + 1) as f64 * w]);
+        ys.extend([*c, *c]);
+    }
+    xs.push(hi);
+    ys.push(0.0);
+    let mut f = Figure::new(&format!("{study} — {m}: {} samples", v.len()), m, "runs");
+    f.series.push(Series {
+        name: "samples".into(),
+        x: xs,
+        y: ys,
+        color: PALETTE[0],
+        dashed: false,
+        width_px: 2.0,
+    });
+    Some(f)
+}
+
 /// Builds the report of sweep folder `out` and writes its plots (SVG) and summary under
 /// `out/report/`.
 pub fn report(out: &Path) -> Result<Report, String> {
@@ -379,29 +446,7 @@ pub fn report(out: &Path) -> Result<Report, String> {
             if lines.is_empty() {
                 continue;
             }
-            let mut f = Figure::new(&format!("{} — {m}", study.name), xname, m);
-            for (k, (g, pts)) in lines.iter().enumerate().take(12) {
-                let name = if g.is_empty() {
-                    (*m).clone()
-                } else {
-                    g.iter()
-                        .map(|(k, v)| format!("{k}={v}"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                };
-                let (xs, ys): (Vec<f64>, Vec<f64>) = pts
-                    .values()
-                    .map(|(x, v)| (*x, v.iter().sum::<f64>() / v.len() as f64))
-                    .unzip();
-                f.series.push(Series {
-                    name,
-                    x: xs,
-                    y: ys,
-                    color: PALETTE[k % PALETTE.len()],
-                    dashed: false,
-                    width_px: 2.0,
-                });
-            }
+            let f = lines_figure(&format!("{} — {m}", study.name), xname, m, &lines);
             let p = dir.join(format!("{m}.svg"));
             table::write_atomically(&p, f.to_svg().as_bytes())?;
             plots.push(p);
@@ -429,43 +474,9 @@ pub fn report(out: &Path) -> Result<Report, String> {
         } else if !study.random.is_empty() {
             // A histogram of the samples.
             let v: Vec<f64> = ok_rows.iter().filter_map(|&i| y[i]).collect();
-            if v.len() < 2 {
+            let Some(f) = histogram(&study.name, m, &v) else {
                 continue;
-            }
-            let (lo, hi) = v
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
-                    (a.min(*x), b.max(*x))
-                });
-            if hi <= lo {
-                continue;
-            }
-            let bins = ((v.len() as f64).sqrt().ceil() as usize).clamp(5, 40);
-            let w = (hi - lo) / bins as f64;
-            let mut counts = vec![0.0; bins];
-            for x in &v {
-                counts[(((x - lo) / w) as usize).min(bins - 1)] += 1.0;
-            }
-            let (mut xs, mut ys) = (vec![lo], vec![0.0]);
-            for (k, c) in counts.iter().enumerate() {
-                xs.extend([lo + k as f64 * w, lo + (k + 1) as f64 * w]);
-                ys.extend([*c, *c]);
-            }
-            xs.push(hi);
-            ys.push(0.0);
-            let mut f = Figure::new(
-                &format!("{} — {m}: {} samples", study.name, v.len()),
-                m,
-                "runs",
-            );
-            f.series.push(Series {
-                name: "samples".into(),
-                x: xs,
-                y: ys,
-                color: PALETTE[0],
-                dashed: false,
-                width_px: 2.0,
-            });
+            };
             let p = dir.join(format!("{m}-histogram.svg"));
             table::write_atomically(&p, f.to_svg().as_bytes())?;
             plots.push(p);

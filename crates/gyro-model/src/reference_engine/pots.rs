@@ -15,9 +15,9 @@
 //! design reader adds. The carriers' other liquid (tube, closed compartments) is rigid and is in
 //! the carrier's mass.
 
-use super::{BodyKin, Chain, EvalInput, EvalOutput, body_kinematics, embed_time};
+use super::{BodyKin, Chain, EvalInput, EvalOutput, body_kinematics, variables};
 use crate::design::Pots;
-use crate::dual::{Jet, M3, Real, V3};
+use crate::dual::{Jet, Real, V3};
 
 /// The Lagrangian's accumulators the pots add to (the reference engine's, or fresh ones).
 pub(super) struct Terms<'a, T: Real, const N: usize> {
@@ -153,12 +153,7 @@ pub(super) fn evaluate<T: Real, const N: usize>(
     let n = chain.n;
     debug_assert!(N > n);
     let zero = Jet::<T, N>::zero();
-    let q: [Jet<T, N>; N] = Jet::variables(inp.q, n);
-    let base_r = M3(inp
-        .world_from_base
-        .0
-        .map(|row| row.map(|x| embed_time::<T, N>(x, n))));
-    let w0 = V3(inp.base_rate.0.map(|x| embed_time::<T, N>(x, n)));
+    let (q, base_r, w0) = variables::<T, N>(inp, n);
     let mut p2 = [zero; N];
     let mut b = [zero; N];
     let (mut t2, mut t0, mut v) = (zero, zero, zero);
