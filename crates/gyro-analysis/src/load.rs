@@ -3,8 +3,8 @@
 //!
 //! Only the channels asked for are decoded (by default every record channel, and no poses: a day
 //! of poses is millions of rows the fits never read), so opening a recording for one channel
-//! costs one channel. [`scan_channel`] concatenates one channel of many runs as a `LazyFrame`, so
-//! queries across runs are planned once and run on polars' pool.
+//! costs one channel. [`stack_channel`] stacks one channel of many runs into one frame, aligned by
+//! field name, for queries across runs.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -71,11 +71,6 @@ impl Run {
                 topic: topic.to_owned(),
                 available: quoted(self.frames.keys().map(String::as_str)),
             })
-    }
-
-    /// The frame of `topic` as a `LazyFrame` (cheap: frames share their buffers).
-    pub fn lazy(&self, topic: &str) -> Result<LazyFrame> {
-        Ok(self.frame(topic)?.clone().lazy())
     }
 
     /// A float column of a channel as a slice (frames built here are contiguous and null-free).
@@ -340,10 +335,12 @@ fn pose_frame(recording: &Recording, p: PoseTable, topic: &str, run_id: &str) ->
     DataFrame::new(n, columns).map_err(AnalysisError::polars(ctx()))
 }
 
-/// One channel of many runs as one `LazyFrame` (rows of each run in time order, runs in the
+/// One channel of many runs stacked into one frame (rows of each run in time order, runs in the
 /// given order, told apart by `run_id`). Runs whose channel has other fields are aligned by name
-/// (missing fields are null).
-pub fn scan_channel(runs: &[Run], topic: &str) -> Result<LazyFrame> {
+/// (missing fields are null). Buffers are shared with the runs' frames, not copied; call
+/// `.lazy()` on the result for query plans if your crate enables polars' `lazy` feature (this
+/// one does not: it would add six polars crates, about six minutes of cold build, for one call).
+pub fn stack_channel(runs: &[Run], topic: &str) -> Result<DataFrame> {
     // The union of the runs' columns, in first-seen order (designs differ in coordinates).
     let mut union: Vec<(PlSmallStr, DataType)> = Vec::new();
     for run in runs {
@@ -353,33 +350,26 @@ pub fn scan_channel(runs: &[Run], topic: &str) -> Result<LazyFrame> {
             }
         }
     }
-    let frames: Vec<LazyFrame> = runs
-        .iter()
-        .map(|r| {
-            let frame = r.frame(topic)?;
-            let exprs: Vec<Expr> = union
-                .iter()
-                .map(|(name, dtype)| {
-                    if frame.column(name).is_ok() {
-                        col(name.clone())
-                    } else {
-                        lit(NULL).cast(dtype.clone()).alias(name.clone())
-                    }
-                })
-                .collect();
-            Ok(frame.clone().lazy().select(exprs))
-        })
-        .collect::<Result<_>>()?;
-    concat(
-        frames,
-        UnionArgs {
-            parallel: true,
-            rechunk: false,
-            to_supertypes: true,
-            ..Default::default()
-        },
-    )
-    .map_err(AnalysisError::polars(format!(
-        "concatenating channel {topic:?}"
-    )))
+    let ctx = || format!("stacking channel {topic:?}");
+    let mut stacked: Option<DataFrame> = None;
+    for run in runs {
+        let frame = run.frame(topic)?;
+        let height = frame.height();
+        let columns: Vec<Column> = union
+            .iter()
+            .map(|(name, dtype)| match frame.column(name) {
+                Ok(c) => c.clone(),
+                Err(_) => Column::full_null(name.clone(), height, dtype),
+            })
+            .collect();
+        let aligned = DataFrame::new(height, columns).map_err(AnalysisError::polars(ctx()))?;
+        match stacked.as_mut() {
+            None => stacked = Some(aligned),
+            Some(s) => {
+                s.vstack_mut_owned(aligned)
+                    .map_err(AnalysisError::polars(ctx()))?;
+            }
+        }
+    }
+    Ok(stacked.unwrap_or_default())
 }

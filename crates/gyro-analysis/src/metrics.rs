@@ -498,6 +498,82 @@ fn f64_last(run: &Run, topic: &str, field: &str) -> Option<f64> {
         .find(|v| v.is_finite())
 }
 
+/// The first manoeuvre's start and the last one's end (s), if any.
+fn manoeuvre_span(events: &[crate::ballistic::ManoeuvreEvent]) -> (Option<f64>, Option<f64>) {
+    let mut manoeuvre_times: Vec<(f64, &str)> = events
+        .iter()
+        .filter(|e| e.manoeuvre != event_fields::STEADY && e.time_s.is_finite())
+        .map(|e| (e.time_s, e.phase.as_str()))
+        .collect();
+    manoeuvre_times.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let first_start = manoeuvre_times
+        .iter()
+        .find(|(_, p)| *p == event_fields::START)
+        .map(|m| m.0);
+    let last_end = manoeuvre_times
+        .iter()
+        .rev()
+        .find(|(_, p)| *p == event_fields::END)
+        .map(|m| m.0);
+    (first_start, last_end)
+}
+
+/// The ballistic deviation after each manoeuvre, with the run's recorded design constants.
+fn ballistic_of(
+    run: &Run,
+    t: &[f64],
+    err: &[f64],
+    events: &[crate::ballistic::ManoeuvreEvent],
+    design_period: Option<f64>,
+    period_hint: Option<f64>,
+    opts: &AnalysisOptions,
+) -> Vec<BallisticDeviation> {
+    let ship_lat = run
+        .f64_field(SHIP_TOPIC, "time_s")
+        .ok()
+        .zip(run.f64_field(SHIP_TOPIC, ship_state::LATITUDE_RAD).ok());
+    let constants = BallisticConstants {
+        undamped_period_s: design_period,
+        schuler_period_s: run
+            .meta_f64(
+                design_constants_record::NAME,
+                design_constants_record::SCHULER_PERIOD_S,
+            )
+            .unwrap_or_else(schuler_period_s),
+        latitude_rad: run
+            .meta_f64(run_record::NAME, run_record::LATITUDE_DEG)
+            .map(f64::to_radians),
+    };
+    ballistic_deviations(
+        t,
+        err,
+        events,
+        ship_lat,
+        &constants,
+        period_hint,
+        &opts.ballistic,
+    )
+}
+
+/// The rolling error from `last_end` on (the whole run without manoeuvres); `None` when the
+/// run recorded no roll.
+fn rolling_of(
+    run: &Run,
+    t: &[f64],
+    err: &[f64],
+    last_end: Option<f64>,
+    period_hint: Option<f64>,
+    opts: &AnalysisOptions,
+) -> Option<RollingError> {
+    let st = run.f64_field(SHIP_TOPIC, ship_state::TIME_S).ok()?;
+    let roll = run.f64_field(SHIP_TOPIC, ship_state::ROLL_RAD).ok()?;
+    let mut ro = opts.rolling;
+    if let Some(te) = last_end {
+        ro.from_s = ro.from_s.max(te);
+    }
+    rolling_error(t, err, st, roll, period_hint, &ro)
+}
+
 /// Analyses a loaded run (see [`analyze_run`]).
 pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> {
     let compass = run.frame(COMPASS_TOPIC)?;
@@ -514,21 +590,7 @@ pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> 
     let mut notes = Vec::new();
 
     let events = events_of(run)?;
-    let mut manoeuvre_times: Vec<(f64, &str)> = events
-        .iter()
-        .filter(|e| e.manoeuvre != event_fields::STEADY && e.time_s.is_finite())
-        .map(|e| (e.time_s, e.phase.as_str()))
-        .collect();
-    manoeuvre_times.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let first_start = manoeuvre_times
-        .iter()
-        .find(|(_, p)| *p == event_fields::START)
-        .map(|m| m.0);
-    let last_end = manoeuvre_times
-        .iter()
-        .rev()
-        .find(|(_, p)| *p == event_fields::END)
-        .map(|m| m.0);
+    let (first_start, last_end) = manoeuvre_span(&events);
     let upto = t.partition_point(|v| first_start.is_none_or(|s| *v < s));
 
     // Settling oscillation: start to first manoeuvre.
@@ -584,31 +646,7 @@ pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> 
     }
 
     // Ballistic deviations.
-    let ship_lat = run
-        .f64_field(SHIP_TOPIC, "time_s")
-        .ok()
-        .zip(run.f64_field(SHIP_TOPIC, ship_state::LATITUDE_RAD).ok());
-    let constants = BallisticConstants {
-        undamped_period_s: design_period,
-        schuler_period_s: run
-            .meta_f64(
-                design_constants_record::NAME,
-                design_constants_record::SCHULER_PERIOD_S,
-            )
-            .unwrap_or_else(schuler_period_s),
-        latitude_rad: run
-            .meta_f64(run_record::NAME, run_record::LATITUDE_DEG)
-            .map(f64::to_radians),
-    };
-    let ballistic = ballistic_deviations(
-        t,
-        err,
-        &events,
-        ship_lat,
-        &constants,
-        period_hint,
-        &opts.ballistic,
-    );
+    let ballistic = ballistic_of(run, t, err, &events, design_period, period_hint, opts);
     for b in ballistic.iter().filter(|b| !b.quality.is_ok()) {
         notes.push(format!(
             "{file}: {COMPASS_TOPIC} reading_error_rad: ballistic deviation of segment {}: {}",
@@ -616,20 +654,8 @@ pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> 
         ));
     }
 
-    // Rolling error.
-    let rolling = match (
-        run.f64_field(SHIP_TOPIC, ship_state::TIME_S),
-        run.f64_field(SHIP_TOPIC, ship_state::ROLL_RAD),
-    ) {
-        (Ok(st), Ok(roll)) => {
-            let mut ro = opts.rolling;
-            if let Some(te) = last_end {
-                ro.from_s = ro.from_s.max(te);
-            }
-            rolling_error(t, err, st, roll, period_hint, &ro)
-        }
-        _ => None,
-    };
+    // Rolling error, after the last manoeuvre.
+    let rolling = rolling_of(run, t, err, last_end, period_hint, opts);
     if let Some(r) = rolling.as_ref().filter(|r| !r.quality.is_ok()) {
         notes.push(format!(
             "{file}: {SHIP_TOPIC} roll_rad: rolling error refused: {}",

@@ -332,7 +332,13 @@ impl Figure {
                 }
             }
         }
-        // Legend to the right of the plot, at most 24 entries.
+        self.legend(&mut prims, right, top);
+        prims
+    }
+
+    /// The legend to the right of the plot (from x = `right`), at most 24 entries.
+    fn legend(&self, prims: &mut Vec<Prim>, right: f64, top: f64) {
+        let w = self.width_px as f64;
         let named: Vec<&Series> = self.series.iter().filter(|s| !s.name.is_empty()).collect();
         let mut y = top + 10.0;
         for s in named.iter().take(24) {
@@ -357,7 +363,6 @@ impl Figure {
                 Anchor::Start,
             ));
         }
-        prims
     }
 }
 

@@ -283,17 +283,7 @@ fn hqr(a: &mut [f64], n: usize) -> Vec<(f64, f64)> {
     while nn >= 0 {
         let mut its = 0;
         loop {
-            let mut l = nn;
-            while l >= 1 {
-                let s = a[idx(l as usize - 1, l as usize - 1)].abs()
-                    + a[idx(l as usize, l as usize)].abs();
-                let s = if s == 0.0 { anorm } else { s };
-                if a[idx(l as usize, l as usize - 1)].abs() + s == s {
-                    a[idx(l as usize, l as usize - 1)] = 0.0;
-                    break;
-                }
-                l -= 1;
-            }
+            let l = split_point(a, n, nn, anorm);
             let nu = nn as usize;
             let x = a[idx(nu, nu)];
             if l == nn {
@@ -368,73 +358,96 @@ fn hqr(a: &mut [f64], n: usize) -> Vec<(f64, f64)> {
                 }
                 m -= 1;
             }
-            let mu = m as usize;
-            for i in mu + 2..=nu {
-                a[idx(i, i - 2)] = 0.0;
-                if i != mu + 2 {
-                    a[idx(i, i - 3)] = 0.0;
-                }
-            }
-            let mut k = mu;
-            while k < nu {
-                if k != mu {
-                    p = a[idx(k, k - 1)];
-                    q = a[idx(k + 1, k - 1)];
-                    r = if k + 1 != nu {
-                        a[idx(k + 2, k - 1)]
-                    } else {
-                        0.0
-                    };
-                    x = p.abs() + q.abs() + r.abs();
-                    if x != 0.0 {
-                        p /= x;
-                        q /= x;
-                        r /= x;
-                    }
-                }
-                let s = (p * p + q * q + r * r).sqrt().copysign(p);
-                if s != 0.0 {
-                    if k == mu {
-                        if l != m {
-                            a[idx(k, k - 1)] = -a[idx(k, k - 1)];
-                        }
-                    } else {
-                        a[idx(k, k - 1)] = -s * x;
-                    }
-                    p += s;
-                    x = p / s;
-                    y = q / s;
-                    let z = r / s;
-                    q /= p;
-                    r /= p;
-                    for j in k..=nu {
-                        let mut pp = a[idx(k, j)] + q * a[idx(k + 1, j)];
-                        if k + 1 != nu {
-                            pp += r * a[idx(k + 2, j)];
-                            a[idx(k + 2, j)] -= pp * z;
-                        }
-                        a[idx(k + 1, j)] -= pp * y;
-                        a[idx(k, j)] -= pp * x;
-                    }
-                    let mmin = if nu < k + 3 { nu } else { k + 3 };
-                    for i in l as usize..=mmin {
-                        let mut pp = x * a[idx(i, k)] + y * a[idx(i, k + 1)];
-                        if k + 1 != nu {
-                            pp += z * a[idx(i, k + 2)];
-                            a[idx(i, k + 2)] -= pp * r;
-                        }
-                        a[idx(i, k + 1)] -= pp * q;
-                        a[idx(i, k)] -= pp;
-                    }
-                }
-                k += 1;
-            }
-            if l >= nn - 1 {
-                continue;
-            }
+            francis_step(a, n, l as usize, m as usize, nu, (p, q, r));
         }
     }
     wr.into_iter().zip(wi).collect()
+}
+
+/// The row `l` ≥ 1 below `nn` whose subdiagonal entry is negligible (set to zero), or 0: the
+/// active block is rows l…nn.
+fn split_point(a: &mut [f64], n: usize, nn: isize, anorm: f64) -> isize {
+    let idx = |i: usize, j: usize| i * n + j;
+    let mut l = nn;
+    while l >= 1 {
+        let s = a[idx(l as usize - 1, l as usize - 1)].abs() + a[idx(l as usize, l as usize)].abs();
+        let s = if s == 0.0 { anorm } else { s };
+        if a[idx(l as usize, l as usize - 1)].abs() + s == s {
+            a[idx(l as usize, l as usize - 1)] = 0.0;
+            break;
+        }
+        l -= 1;
+    }
+    l
+}
+
+/// One Francis double-shift QR step on rows `mu`…`nu` of the active block `l`…`nu`, from the
+/// first column's Householder vector (p, q, r) (EISPACK `hqr`).
+fn francis_step(a: &mut [f64], n: usize, l: usize, mu: usize, nu: usize, pqr: (f64, f64, f64)) {
+    let idx = |i: usize, j: usize| i * n + j;
+    let (mut p, mut q, mut r) = pqr;
+    // x is the column scale of the previous k (set before it is read at k > mu).
+    let mut x = 0.0;
+    for i in mu + 2..=nu {
+        a[idx(i, i - 2)] = 0.0;
+        if i != mu + 2 {
+            a[idx(i, i - 3)] = 0.0;
+        }
+    }
+    let mut k = mu;
+    while k < nu {
+        if k != mu {
+            p = a[idx(k, k - 1)];
+            q = a[idx(k + 1, k - 1)];
+            r = if k + 1 != nu {
+                a[idx(k + 2, k - 1)]
+            } else {
+                0.0
+            };
+            x = p.abs() + q.abs() + r.abs();
+            if x != 0.0 {
+                p /= x;
+                q /= x;
+                r /= x;
+            }
+        }
+        let s = (p * p + q * q + r * r).sqrt().copysign(p);
+        if s != 0.0 {
+            if k == mu {
+                if l != mu {
+                    a[idx(k, k - 1)] = -a[idx(k, k - 1)];
+                }
+            } else {
+                a[idx(k, k - 1)] = -s * x;
+            }
+            p += s;
+            x = p / s;
+            let y = q / s;
+            let z = r / s;
+            q /= p;
+            r /= p;
+            for j in k..=nu {
+                let mut pp = a[idx(k, j)] + q * a[idx(k + 1, j)];
+                if k + 1 != nu {
+                    pp += r * a[idx(k + 2, j)];
+                    a[idx(k + 2, j)] -= pp * z;
+                }
+                a[idx(k + 1, j)] -= pp * y;
+                a[idx(k, j)] -= pp * x;
+            }
+            let mmin = if nu < k + 3 { nu } else { k + 3 };
+            for i in l..=mmin {
+                let mut pp = x * a[idx(i, k)] + y * a[idx(i, k + 1)];
+                if k + 1 != nu {
+                    pp += z * a[idx(i, k + 2)];
+                    a[idx(i, k + 2)] -= pp * r;
+                }
+                a[idx(i, k + 1)] -= pp * q;
+                a[idx(i, k)] -= pp;
+            }
+        }
+        k += 1;
+    }
 }
 
 #[cfg(test)]

@@ -995,146 +995,89 @@ fn invalid_options_are_rejected() {
         t_end: 1.0,
     };
     let good = tol(1e-6, 1e-9);
-    type Case = (
-        &'static str,
-        Method,
-        Tolerances,
-        OutputGrid,
-        Vec<f64>,
-        Vec<f64>,
-    );
-    let cases: Vec<Case> = vec![
-        (
-            "rtol 0",
-            Method::Dopri5,
-            tol(0.0, 1e-9),
-            grid,
-            vec![1.0],
-            vec![],
-        ),
-        (
-            "rtol < 0",
-            Method::Dopri5,
-            tol(-1e-6, 1e-9),
-            grid,
-            vec![1.0],
-            vec![],
-        ),
-        (
-            "rtol NaN",
-            Method::Rodas4,
-            tol(f64::NAN, 1e-9),
-            grid,
-            vec![1.0],
-            vec![],
-        ),
-        (
-            "atol NaN",
-            Method::Dop853,
-            tol(1e-6, f64::NAN),
-            grid,
-            vec![1.0],
-            vec![],
-        ),
-        (
-            "atol < 0",
-            Method::Dop853,
-            tol(1e-6, -1.0),
-            grid,
-            vec![1.0],
-            vec![],
-        ),
-        (
+    struct Case {
+        what: &'static str,
+        method: Method,
+        tol: Tolerances,
+        grid: OutputGrid,
+        x: Vec<f64>,
+        breakpoints: Vec<f64>,
+    }
+    let case = |what, method, tol| Case {
+        what,
+        method,
+        tol,
+        grid,
+        x: vec![1.0],
+        breakpoints: vec![],
+    };
+    let dopri5 = |what| case(what, Method::Dopri5, good);
+    let cases = [
+        case("rtol 0", Method::Dopri5, tol(0.0, 1e-9)),
+        case("rtol < 0", Method::Dopri5, tol(-1e-6, 1e-9)),
+        case("rtol NaN", Method::Rodas4, tol(f64::NAN, 1e-9)),
+        case("atol NaN", Method::Dop853, tol(1e-6, f64::NAN)),
+        case("atol < 0", Method::Dop853, tol(1e-6, -1.0)),
+        case(
             "max step 0",
             Method::Dopri5,
             Tolerances {
                 max_step_s: 0.0,
                 ..good
             },
-            grid,
-            vec![1.0],
-            vec![],
         ),
-        (
+        case(
             "initial step NaN",
             Method::Dopri5,
             Tolerances {
                 initial_step_s: Some(f64::NAN),
                 ..good
             },
-            grid,
-            vec![1.0],
-            vec![],
         ),
-        (
-            "rk4 step 0",
-            Method::Rk4 { step_s: 0.0 },
-            good,
-            grid,
-            vec![1.0],
-            vec![],
-        ),
-        (
-            "rk4 step NaN",
-            Method::Rk4 { step_s: f64::NAN },
-            good,
-            grid,
-            vec![1.0],
-            vec![],
-        ),
-        (
-            "dt 0",
-            Method::Dopri5,
-            good,
-            OutputGrid { dt: 0.0, ..grid },
-            vec![1.0],
-            vec![],
-        ),
-        (
-            "t_end < t0",
-            Method::Dopri5,
-            good,
-            OutputGrid {
+        case("rk4 step 0", Method::Rk4 { step_s: 0.0 }, good),
+        case("rk4 step NaN", Method::Rk4 { step_s: f64::NAN }, good),
+        Case {
+            grid: OutputGrid { dt: 0.0, ..grid },
+            ..dopri5("dt 0")
+        },
+        Case {
+            grid: OutputGrid {
                 t_end: -1.0,
                 ..grid
             },
-            vec![1.0],
-            vec![],
-        ),
-        (
-            "t_end NaN",
-            Method::Dopri5,
-            good,
-            OutputGrid {
+            ..dopri5("t_end < t0")
+        },
+        Case {
+            grid: OutputGrid {
                 t_end: f64::NAN,
                 ..grid
             },
-            vec![1.0],
-            vec![],
-        ),
-        (
-            "wrong dim",
-            Method::Dopri5,
-            good,
-            grid,
-            vec![1.0, 2.0],
-            vec![],
-        ),
-        (
-            "NaN breakpoint",
-            Method::Dopri5,
-            good,
-            grid,
-            vec![1.0],
-            vec![f64::NAN],
-        ),
+            ..dopri5("t_end NaN")
+        },
+        Case {
+            x: vec![1.0, 2.0],
+            ..dopri5("wrong dim")
+        },
+        Case {
+            breakpoints: vec![f64::NAN],
+            ..dopri5("NaN breakpoint")
+        },
     ];
-    for (what, method, t, g, mut x, bps) in cases {
+    for mut c in cases {
         let mut calls = 0;
-        let result = integrate(&mut p, method, &t, &mut x, &g, &bps, |_, _| {
-            calls += 1;
-            ControlFlow::Continue(())
-        });
+        let result = integrate(
+            &mut p,
+            c.method,
+            &c.tol,
+            &mut c.x,
+            &c.grid,
+            &c.breakpoints,
+            |_, _| {
+                calls += 1;
+                ControlFlow::Continue(())
+            },
+        );
+        let what = c.what;
         assert!(
             matches!(result, Err(SolveError::InvalidOptions(_))),
             "{what}: {result:?}"

@@ -234,78 +234,103 @@ fn histogram(study: &str, m: &str, v: &[f64]) -> Option<Figure> {
     Some(f)
 }
 
-/// Builds the report of sweep folder `out` and writes its plots (SVG) and summary under
-/// `out/report/`.
-pub fn report(out: &Path) -> Result<Report, String> {
-    let plan = Plan::load_frozen(out)?;
-    let path = table::metrics_path(out);
-    if !path.is_file() {
-        return Err(format!(
-            "{}: no table yet (run `gyrolab sweep run` first; `gyrolab sweep status` tells what is done)",
-            path.display()
-        ));
-    }
-    let df = table::read_parquet(&path)?;
-    let n = df.height();
-    let status = str_column(&df, "status").unwrap_or_default();
-    let ok_rows: Vec<usize> = (0..n).filter(|&i| status[i] == OK).collect();
-    let study = &plan.study;
-    let scene = str_column(&df, "scene").unwrap_or_default();
-    let design = str_column(&df, "design").unwrap_or_default();
-    // Grid axes that vary, with their values as text (group keys) and as numbers (x).
-    let grid: Vec<AxisColumn> = study
-        .grid
-        .iter()
-        .map(|a| {
-            let name = a.key.name.clone();
-            let text = str_column(&df, &name).unwrap_or_else(|| vec![String::new(); n]);
-            let num = matches!(a.values.first(), Some(toml::Value::Float(_)))
-                .then(|| f64_column(&df, &name))
-                .flatten();
-            (name, text, num)
-        })
-        .collect();
-    let several_scenes = study.scenes.len() > 1;
-    let several_designs = study.designs.len() > 1;
-    let group_of = |i: usize, except: Option<&str>| -> Group {
-        let mut g = Vec::new();
-        if several_scenes {
-            g.push(("scene".to_string(), scene[i].clone()));
+/// The metrics table as the report reads it: rows, which of them succeeded, and the columns
+/// that tell groups apart.
+struct Rows<'a> {
+    study: &'a crate::study::Study,
+    df: DataFrame,
+    n: usize,
+    status: Vec<String>,
+    ok: Vec<usize>,
+    scene: Vec<String>,
+    design: Vec<String>,
+    /// Grid axes, with their values as text (group keys) and as numbers (x).
+    grid: Vec<AxisColumn>,
+    /// The metrics that are numbers (not `_quality` labels).
+    numeric: Vec<&'a String>,
+}
+
+impl<'a> Rows<'a> {
+    fn new(study: &'a crate::study::Study, df: DataFrame) -> Self {
+        let n = df.height();
+        let status = str_column(&df, "status").unwrap_or_default();
+        let ok = (0..n).filter(|&i| status[i] == OK).collect();
+        let grid = study
+            .grid
+            .iter()
+            .map(|a| {
+                let name = a.key.name.clone();
+                let text = str_column(&df, &name).unwrap_or_else(|| vec![String::new(); n]);
+                let num = matches!(a.values.first(), Some(toml::Value::Float(_)))
+                    .then(|| f64_column(&df, &name))
+                    .flatten();
+                (name, text, num)
+            })
+            .collect();
+        Rows {
+            study,
+            scene: str_column(&df, "scene").unwrap_or_default(),
+            design: str_column(&df, "design").unwrap_or_default(),
+            numeric: study
+                .metrics
+                .iter()
+                .filter(|m| !m.ends_with("_quality"))
+                .collect(),
+            df,
+            n,
+            status,
+            ok,
+            grid,
         }
-        if several_designs {
-            g.push(("design".to_string(), design[i].clone()));
+    }
+
+    /// Row `i`'s group: its scene and design when the study has several, and its value of every
+    /// grid axis that varies, but `except`.
+    fn group_of(&self, i: usize, except: Option<&str>) -> Group {
+        let mut g = Vec::new();
+        if self.study.scenes.len() > 1 {
+            g.push(("scene".to_string(), self.scene[i].clone()));
+        }
+        if self.study.designs.len() > 1 {
+            g.push(("design".to_string(), self.design[i].clone()));
         }
         // Axes of one value set the study, they tell no group apart.
-        for ((name, text, _), a) in grid.iter().zip(&study.grid) {
+        for ((name, text, _), a) in self.grid.iter().zip(&self.study.grid) {
             if Some(name.as_str()) != except && a.values.len() > 1 {
                 g.push((name.clone(), text[i].clone()));
             }
         }
         g
-    };
-    let numeric: Vec<&String> = study
-        .metrics
-        .iter()
-        .filter(|m| !m.ends_with("_quality"))
-        .collect();
+    }
 
-    // Harmonic fits.
+    /// The numeric metrics that are plotted and tabled (not the samples' sigmas).
+    fn shown(&self) -> impl Iterator<Item = &'a String> + '_ {
+        self.numeric
+            .iter()
+            .copied()
+            .filter(|m| !m.contains("sigma"))
+    }
+}
+
+/// The study's `[[report.harmonic]]` fits, one per metric, axis and group.
+fn harmonic_fits(rows: &Rows) -> Vec<HarmonicFit> {
     let mut harmonics = Vec::new();
-    for h in &study.harmonics {
-        let Some(y) = f64_column(&df, &h.metric) else {
+    for h in &rows.study.harmonics {
+        let Some(y) = f64_column(&rows.df, &h.metric) else {
             continue;
         };
-        let Some((_, _, Some(x))) = grid.iter().find(|(n, _, _)| *n == h.axis) else {
+        let Some((_, _, Some(x))) = rows.grid.iter().find(|(n, _, _)| *n == h.axis) else {
             continue;
         };
         // Per group: its first row (the fits come in run-index order), the angles, the values.
         let mut groups: BTreeMap<Group, FitData> = BTreeMap::new();
-        for &i in &ok_rows {
+        for &i in &rows.ok {
             if let (Some(xi), Some(yi)) = (x[i], y[i]) {
-                let e =
-                    groups
-                        .entry(group_of(i, Some(&h.axis)))
-                        .or_insert((i, Vec::new(), Vec::new()));
+                let e = groups.entry(rows.group_of(i, Some(&h.axis))).or_insert((
+                    i,
+                    Vec::new(),
+                    Vec::new(),
+                ));
                 e.1.push(radians(&h.axis, xi));
                 e.2.push(yi);
             }
@@ -332,63 +357,69 @@ pub fn report(out: &Path) -> Result<Report, String> {
             }
         }
     }
+    harmonics
+}
 
-    // Spreads over the Monte Carlo samples, per grid point.
+/// Spreads over the Monte Carlo samples, per metric and grid point (none without samples).
+fn spreads(rows: &Rows) -> Vec<Spread> {
     let mut spreads = Vec::new();
-    if !study.random.is_empty() {
-        for m in &numeric {
-            let Some(y) = f64_column(&df, m) else {
-                continue;
-            };
-            let mut groups: BTreeMap<Group, Vec<f64>> = BTreeMap::new();
-            for &i in &ok_rows {
-                if let Some(v) = y[i] {
-                    groups.entry(group_of(i, None)).or_default().push(v);
-                }
-            }
-            for (group, mut v) in groups {
-                v.sort_by(f64::total_cmp);
-                let mean = v.iter().sum::<f64>() / v.len() as f64;
-                let var =
-                    v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (v.len().max(2) - 1) as f64;
-                spreads.push(Spread {
-                    metric: (*m).clone(),
-                    group,
-                    n: v.len(),
-                    mean,
-                    std: var.sqrt(),
-                    quantiles: QUANTILES.map(|q| quantile(&v, q)),
-                });
+    if rows.study.random.is_empty() {
+        return spreads;
+    }
+    for m in &rows.numeric {
+        let Some(y) = f64_column(&rows.df, m) else {
+            continue;
+        };
+        let mut groups: BTreeMap<Group, Vec<f64>> = BTreeMap::new();
+        for &i in &rows.ok {
+            if let Some(v) = y[i] {
+                groups.entry(rows.group_of(i, None)).or_default().push(v);
             }
         }
+        for (group, mut v) in groups {
+            v.sort_by(f64::total_cmp);
+            let mean = v.iter().sum::<f64>() / v.len() as f64;
+            let var =
+                v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (v.len().max(2) - 1) as f64;
+            spreads.push(Spread {
+                metric: (*m).clone(),
+                group,
+                n: v.len(),
+                mean,
+                std: var.sqrt(),
+                quantiles: QUANTILES.map(|q| quantile(&v, q)),
+            });
+        }
     }
+    spreads
+}
 
-    // The summary table: one line per grid point, the mean of each metric.
-    let shown: Vec<&String> = numeric
-        .iter()
-        .copied()
-        .filter(|m| !m.contains("sigma"))
-        .filter(|m| f64_column(&df, m).is_some_and(|c| c.iter().any(Option::is_some)))
+/// The summary table (Markdown): one line per grid point in run-index order, its succeeded
+/// runs, and the mean of up to six metrics.
+fn summary_table(rows: &Rows) -> String {
+    let (df, n) = (&rows.df, rows.n);
+    let shown: Vec<&String> = rows
+        .shown()
+        .filter(|m| f64_column(df, m).is_some_and(|c| c.iter().any(Option::is_some)))
         .take(6)
         .collect();
-    let header: Vec<String> = if n == 0 {
+    let mut columns: Vec<String> = if n == 0 {
         Vec::new()
     } else {
-        group_of(0, None).into_iter().map(|(k, _)| k).collect()
+        rows.group_of(0, None).into_iter().map(|(k, _)| k).collect()
     };
-    let mut columns = header.clone();
     columns.push("ok".into());
     columns.extend(shown.iter().map(|m| (*m).clone()));
     let mut t = Table::new(&columns);
     let ycols: Vec<Vec<Option<f64>>> = shown
         .iter()
-        .map(|m| f64_column(&df, m).unwrap_or_else(|| vec![None; n]))
+        .map(|m| f64_column(df, m).unwrap_or_else(|| vec![None; n]))
         .collect();
     // Grid points in run-index order (the table's), not sorted as text.
     let mut points: Vec<(Group, Vec<usize>)> = Vec::new();
     let mut seen: BTreeMap<Group, usize> = BTreeMap::new();
     for i in 0..n {
-        let g = group_of(i, None);
+        let g = rows.group_of(i, None);
         match seen.get(&g) {
             Some(&k) => points[k].1.push(i),
             None => {
@@ -397,10 +428,14 @@ pub fn report(out: &Path) -> Result<Report, String> {
             }
         }
     }
-    for (g, rows) in &points {
-        let ok: Vec<usize> = rows.iter().copied().filter(|&i| status[i] == OK).collect();
+    for (g, members) in &points {
+        let ok: Vec<usize> = members
+            .iter()
+            .copied()
+            .filter(|&i| rows.status[i] == OK)
+            .collect();
         let mut cells: Vec<String> = g.iter().map(|(_, v)| v.clone()).collect();
-        cells.push(format!("{}/{}", ok.len(), rows.len()));
+        cells.push(format!("{}/{}", ok.len(), members.len()));
         for y in &ycols {
             let v: Vec<f64> = ok.iter().filter_map(|&i| y[i]).collect();
             cells.push(if v.is_empty() {
@@ -411,13 +446,15 @@ pub fn report(out: &Path) -> Result<Report, String> {
         }
         t.row(cells);
     }
-    let summary_markdown = t.render_markdown();
+    t.render_markdown()
+}
 
-    // Plots.
-    let dir = out.join("report");
-    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+/// Writes the plots into `dir`: per metric, lines against the first numeric axis that varies
+/// (and a heat map over the first two numeric axes), or a histogram of Monte Carlo samples.
+fn write_plots(rows: &Rows, dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let name = &rows.study.name;
     let mut plots = Vec::new();
-    let xaxis = grid.iter().find(|(_, t, x)| {
+    let xaxis = rows.grid.iter().find(|(_, t, x)| {
         x.is_some() && {
             let mut u = t.clone();
             u.sort();
@@ -425,17 +462,17 @@ pub fn report(out: &Path) -> Result<Report, String> {
             u.len() > 1
         }
     });
-    for m in numeric.iter().filter(|m| !m.contains("sigma")) {
-        let Some(y) = f64_column(&df, m) else {
+    for m in rows.shown() {
+        let Some(y) = f64_column(&rows.df, m) else {
             continue;
         };
         if let Some((xname, _, Some(x))) = xaxis {
             // Lines: mean over samples against the first numeric axis, one per other group.
             let mut lines: BTreeMap<Group, Line> = BTreeMap::new();
-            for &i in &ok_rows {
+            for &i in &rows.ok {
                 if let (Some(xi), Some(yi)) = (x[i], y[i]) {
                     lines
-                        .entry(group_of(i, Some(xname)))
+                        .entry(rows.group_of(i, Some(xname)))
                         .or_default()
                         .entry((xi * 1e9).round() as i64)
                         .or_insert((xi, Vec::new()))
@@ -446,35 +483,22 @@ pub fn report(out: &Path) -> Result<Report, String> {
             if lines.is_empty() {
                 continue;
             }
-            let f = lines_figure(&format!("{} — {m}", study.name), xname, m, &lines);
+            let f = lines_figure(&format!("{name} — {m}"), xname, m, &lines);
             let p = dir.join(format!("{m}.svg"));
             table::write_atomically(&p, f.to_svg().as_bytes())?;
             plots.push(p);
             // A heat map over the first two numeric axes.
-            let numeric_axes: Vec<_> = grid.iter().filter(|(_, _, x)| x.is_some()).collect();
-            if numeric_axes.len() >= 2 {
-                let (an, _, ax) = numeric_axes[0];
-                let (bn, _, bx) = numeric_axes[1];
-                if let (Some(ax), Some(bx)) = (ax, bx) {
-                    let svg = heat_map(
-                        &format!("{} — {m}", study.name),
-                        an,
-                        bn,
-                        m,
-                        &ok_rows,
-                        ax,
-                        bx,
-                        &y,
-                    );
-                    let p = dir.join(format!("{m}-map.svg"));
-                    table::write_atomically(&p, svg.as_bytes())?;
-                    plots.push(p);
-                }
+            let numeric_axes: Vec<_> = rows.grid.iter().filter(|(_, _, x)| x.is_some()).collect();
+            if let [(an, _, Some(ax)), (bn, _, Some(bx)), ..] = numeric_axes[..] {
+                let svg = heat_map(&format!("{name} — {m}"), an, bn, m, &rows.ok, ax, bx, &y);
+                let p = dir.join(format!("{m}-map.svg"));
+                table::write_atomically(&p, svg.as_bytes())?;
+                plots.push(p);
             }
-        } else if !study.random.is_empty() {
+        } else if !rows.study.random.is_empty() {
             // A histogram of the samples.
-            let v: Vec<f64> = ok_rows.iter().filter_map(|&i| y[i]).collect();
-            let Some(f) = histogram(&study.name, m, &v) else {
+            let v: Vec<f64> = rows.ok.iter().filter_map(|&i| y[i]).collect();
+            let Some(f) = histogram(name, m, &v) else {
                 continue;
             };
             let p = dir.join(format!("{m}-histogram.svg"));
@@ -482,22 +506,40 @@ pub fn report(out: &Path) -> Result<Report, String> {
             plots.push(p);
         }
     }
+    Ok(plots)
+}
+
+/// Builds the report of sweep folder `out` and writes its plots (SVG) and summary under
+/// `out/report/`.
+pub fn report(out: &Path) -> Result<Report, String> {
+    let plan = Plan::load_frozen(out)?;
+    let path = table::metrics_path(out);
+    if !path.is_file() {
+        return Err(format!(
+            "{}: no table yet (run `gyrolab sweep run` first; `gyrolab sweep status` tells what is done)",
+            path.display()
+        ));
+    }
+    let study = &plan.study;
+    let rows = Rows::new(study, table::read_parquet(&path)?);
+    let dir = out.join("report");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let report = Report {
         study: study.name.clone(),
         total_runs: plan.total_runs(),
-        rows: n,
-        ok: ok_rows.len(),
-        failed: n - ok_rows.len(),
+        rows: rows.n,
+        ok: rows.ok.len(),
+        failed: rows.n - rows.ok.len(),
         fixed: study
             .grid
             .iter()
             .filter(|a| a.values.len() == 1)
             .map(|a| (a.key.name.clone(), a.values[0].to_string()))
             .collect(),
-        harmonics,
-        spreads,
-        summary_markdown,
-        plots,
+        harmonics: harmonic_fits(&rows),
+        spreads: spreads(&rows),
+        summary_markdown: summary_table(&rows),
+        plots: write_plots(&rows, &dir)?,
     };
     let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
     table::write_atomically(&dir.join("report.json"), json.as_bytes())?;

@@ -372,52 +372,14 @@ impl Study {
                 "no base scene (allowed: a list of scene paths or shipped names, at least one)",
             ));
         }
-        let list = |v: &[Spanned<String>], key: &str| -> Result<Vec<(String, usize)>, InputError> {
-            let mut out: Vec<(String, usize)> = Vec::new();
-            for s in v {
-                let r = s.get_ref().trim().to_string();
-                if r.is_empty() {
-                    return Err(src.err(s.span(), key, "an empty name"));
-                }
-                if out.iter().any(|(x, _)| *x == r) {
-                    return Err(src.err(s.span(), key, format!("`{r}` is listed twice")));
-                }
-                out.push((r, src.line(s.span())));
-            }
-            Ok(out)
-        };
-        let scenes = list(f.scenes.get_ref(), "scenes")?;
-        let designs = list(&f.designs, "designs")?;
+        let scenes = name_list(f.scenes.get_ref(), "scenes", &src)?;
+        let designs = name_list(&f.designs, "designs", &src)?;
 
         let mut grid = Vec::new();
         for (k, a) in f.axis.iter().enumerate() {
             grid.push(grid_axis(a, k, &src)?);
         }
-        let (samples, seed) = match &f.monte_carlo {
-            None => (1, 0),
-            Some(mc) => {
-                let n = *mc.samples.get_ref();
-                if n < 1 {
-                    return Err(src.err(
-                        mc.samples.span(),
-                        "monte_carlo.samples",
-                        format!("{n} is out of range (allowed: ≥ 1)"),
-                    ));
-                }
-                let seed = match &mc.seed {
-                    None => 0,
-                    Some(s) if *s.get_ref() < 0 => {
-                        return Err(src.err(
-                            s.span(),
-                            "monte_carlo.seed",
-                            format!("{} is out of range (allowed: ≥ 0)", s.get_ref()),
-                        ));
-                    }
-                    Some(s) => *s.get_ref() as u64,
-                };
-                (n as u64, seed)
-            }
-        };
+        let (samples, seed) = monte_carlo(f.monte_carlo.as_ref(), &src)?;
         let mut random = Vec::new();
         for (k, r) in f.random.iter().enumerate() {
             random.push(random_axis(r, k, &src)?);
@@ -430,65 +392,10 @@ impl Study {
                 "random axes need a `[monte_carlo]` table with `samples` (and a `seed`)",
             ));
         }
-        let mut seen: Vec<&str> = Vec::new();
-        for (name, line) in grid
-            .iter()
-            .map(|a| (&a.key.name, a.key.line))
-            .chain(random.iter().map(|a| (&a.key.name, a.key.line)))
-        {
-            if seen.contains(&name.as_str()) {
-                return Err(InputError {
-                    file: file.to_string(),
-                    line: Some(line),
-                    key: name.clone(),
-                    message: "this key is set by two axes (allowed: one axis per key)".into(),
-                });
-            }
-            seen.push(name);
-        }
+        one_axis_per_key(&grid, &random, file)?;
 
         let (recordings, metrics, max_storage_mb) = keep(f.keep.as_ref(), &src)?;
-        let mut harmonics = Vec::new();
-        for h in f.report.iter().flat_map(|r| &r.harmonic) {
-            let metric = h.metric.get_ref().clone();
-            if !METRICS.contains(&metric.as_str()) {
-                return Err(src.err(
-                    h.metric.span(),
-                    "report.harmonic.metric",
-                    format!(
-                        "unknown metric `{metric}` (allowed: {})",
-                        METRICS.join(", ")
-                    ),
-                ));
-            }
-            let axis = h.axis.get_ref().clone();
-            if !grid.iter().any(|a| a.key.name == axis) {
-                return Err(src.err(
-                    h.axis.span(),
-                    "report.harmonic.axis",
-                    format!(
-                        "`{axis}` is not a grid axis of this study (allowed: {})",
-                        grid.iter()
-                            .map(|a| a.key.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                ));
-            }
-            let order = *h.order.get_ref();
-            if !(1..=8).contains(&order) {
-                return Err(src.err(
-                    h.order.span(),
-                    "report.harmonic.order",
-                    format!("{order} is out of range (allowed: 1 … 8)"),
-                ));
-            }
-            harmonics.push(Harmonic {
-                metric,
-                axis,
-                order: order as u32,
-            });
-        }
+        let harmonics = harmonics(f.report.as_ref(), &grid, &src)?;
 
         let study = Study {
             name,
@@ -543,6 +450,128 @@ impl Study {
             .find(|k| k.name == key)
             .map(|k| k.line)
     }
+}
+
+/// A list of scene or design names: none empty, none twice; with each one's line.
+fn name_list(
+    v: &[Spanned<String>],
+    key: &str,
+    src: &Src,
+) -> Result<Vec<(String, usize)>, InputError> {
+    let mut out: Vec<(String, usize)> = Vec::new();
+    for s in v {
+        let r = s.get_ref().trim().to_string();
+        if r.is_empty() {
+            return Err(src.err(s.span(), key, "an empty name"));
+        }
+        if out.iter().any(|(x, _)| *x == r) {
+            return Err(src.err(s.span(), key, format!("`{r}` is listed twice")));
+        }
+        out.push((r, src.line(s.span())));
+    }
+    Ok(out)
+}
+
+/// The `[monte_carlo]` table: (samples, seed); one sample and seed 0 without it.
+fn monte_carlo(mc: Option<&MonteCarloFile>, src: &Src) -> Result<(u64, u64), InputError> {
+    let Some(mc) = mc else {
+        return Ok((1, 0));
+    };
+    let n = *mc.samples.get_ref();
+    if n < 1 {
+        return Err(src.err(
+            mc.samples.span(),
+            "monte_carlo.samples",
+            format!("{n} is out of range (allowed: ≥ 1)"),
+        ));
+    }
+    let seed = match &mc.seed {
+        None => 0,
+        Some(s) if *s.get_ref() < 0 => {
+            return Err(src.err(
+                s.span(),
+                "monte_carlo.seed",
+                format!("{} is out of range (allowed: ≥ 0)", s.get_ref()),
+            ));
+        }
+        Some(s) => *s.get_ref() as u64,
+    };
+    Ok((n as u64, seed))
+}
+
+/// No key is set by two axes (grid or random).
+fn one_axis_per_key(
+    grid: &[GridAxis],
+    random: &[RandomAxis],
+    file: &str,
+) -> Result<(), InputError> {
+    let mut seen: Vec<&str> = Vec::new();
+    for (name, line) in grid
+        .iter()
+        .map(|a| (&a.key.name, a.key.line))
+        .chain(random.iter().map(|a| (&a.key.name, a.key.line)))
+    {
+        if seen.contains(&name.as_str()) {
+            return Err(InputError {
+                file: file.to_string(),
+                line: Some(line),
+                key: name.clone(),
+                message: "this key is set by two axes (allowed: one axis per key)".into(),
+            });
+        }
+        seen.push(name);
+    }
+    Ok(())
+}
+
+/// The `[[report.harmonic]]` fits: a known metric, a grid axis of this study, order 1 … 8.
+fn harmonics(
+    report: Option<&ReportFile>,
+    grid: &[GridAxis],
+    src: &Src,
+) -> Result<Vec<Harmonic>, InputError> {
+    let mut harmonics = Vec::new();
+    for h in report.iter().flat_map(|r| &r.harmonic) {
+        let metric = h.metric.get_ref().clone();
+        if !METRICS.contains(&metric.as_str()) {
+            return Err(src.err(
+                h.metric.span(),
+                "report.harmonic.metric",
+                format!(
+                    "unknown metric `{metric}` (allowed: {})",
+                    METRICS.join(", ")
+                ),
+            ));
+        }
+        let axis = h.axis.get_ref().clone();
+        if !grid.iter().any(|a| a.key.name == axis) {
+            return Err(src.err(
+                h.axis.span(),
+                "report.harmonic.axis",
+                format!(
+                    "`{axis}` is not a grid axis of this study (allowed: {})",
+                    grid.iter()
+                        .map(|a| a.key.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
+        let order = *h.order.get_ref();
+        if !(1..=8).contains(&order) {
+            return Err(src.err(
+                h.order.span(),
+                "report.harmonic.order",
+                format!("{order} is out of range (allowed: 1 … 8)"),
+            ));
+        }
+        harmonics.push(Harmonic {
+            metric,
+            axis,
+            order: order as u32,
+        });
+    }
+    Ok(harmonics)
 }
 
 fn grid_axis(a: &AxisFile, k: usize, src: &Src) -> Result<GridAxis, InputError> {

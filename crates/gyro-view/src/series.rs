@@ -132,29 +132,9 @@ pub(crate) fn log_series(
     fit: &dyn SettlingFit,
 ) -> Result<SeriesSummary, ViewError> {
     let base = format!("{root}/series");
-    // The fit runs on the recorded (SI) reading error before it is converted for display.
-    // Its window: after the last manoeuvre event (the settling that follows it), else all.
-    let settle_from_ns = run
-        .events
-        .iter()
-        .map(|e| e.time_ns)
-        .max()
-        .unwrap_or(i64::MIN);
-    let fitted = match run.compass.get("reading_error_rad") {
-        Some(err) => {
-            let n = run.compass.time_ns.len().min(err.len());
-            let first = run.compass.time_ns[..n].partition_point(|&t| t < settle_from_ns);
-            let t_s: Vec<f64> = run.compass.time_ns[first..n]
-                .iter()
-                .map(|&t| t as f64 * 1e-9)
-                .collect();
-            fit.fit(&t_s, &err[first..n])
-                .filter(DampedSinusoid::is_drawable)
-        }
-        None => None,
-    };
+    let fitted = settling_fit(run, fit);
     // Event markers need the reading error in degrees at the event times: keep a copy of the
-    // values near events only.
+    // values near events only, before the quantities are taken out of the run.
     let event_marks: Vec<(i64, f64)> = match run.compass.get("reading_error_rad") {
         Some(err) => run
             .events
@@ -169,6 +149,47 @@ pub(crate) fn log_series(
         None => Vec::new(),
     };
     let samples = run.compass.time_ns.len();
+    log_quantities(rec, run, run_index, &base)?;
+    if !run.events.is_empty() {
+        log_events(rec, run, root, &base, event_marks)?;
+    }
+    if let Some(f) = &fitted {
+        log_fit(rec, run, run_index, &base, f)?;
+    }
+    Ok(SeriesSummary {
+        samples,
+        fit: fitted,
+    })
+}
+
+/// The damped sinusoid fitted to the recorded (SI) reading error, before it is converted for
+/// display. Its window: after the last manoeuvre event (the settling that follows it), else all.
+fn settling_fit(run: &RunData, fit: &dyn SettlingFit) -> Option<DampedSinusoid> {
+    let settle_from_ns = run
+        .events
+        .iter()
+        .map(|e| e.time_ns)
+        .max()
+        .unwrap_or(i64::MIN);
+    let err = run.compass.get("reading_error_rad")?;
+    let n = run.compass.time_ns.len().min(err.len());
+    let first = run.compass.time_ns[..n].partition_point(|&t| t < settle_from_ns);
+    let t_s: Vec<f64> = run.compass.time_ns[first..n]
+        .iter()
+        .map(|&t| t as f64 * 1e-9)
+        .collect();
+    fit.fit(&t_s, &err[first..n])
+        .filter(DampedSinusoid::is_drawable)
+}
+
+/// Every recorded quantity of [`QUANTITIES`] as a line (angles in degrees); the values are
+/// moved out of the run, not copied.
+fn log_quantities(
+    rec: &RecordingStream,
+    run: &mut RunData,
+    run_index: usize,
+    base: &str,
+) -> Result<(), ViewError> {
     for q in &QUANTITIES {
         let source: &mut Series = if q.compass {
             &mut run.compass
@@ -203,98 +224,111 @@ pub(crate) fn log_series(
         values.truncate(len);
         send_scalars(rec, &entity, source.time_ns[..len].to_vec(), values)?;
     }
-    // Manoeuvre events: markers on the reading error and speed, and a text log.
-    if !run.events.is_empty() {
-        if !event_marks.is_empty() {
-            let entity = format!("{base}/reading_error_deg/events");
-            rec.log_static(
-                entity.as_str(),
-                &SeriesPoints::new()
-                    .with_names([format!("{} manoeuvres", run.name)])
-                    .with_markers([rerun::components::MarkerShape::Diamond])
-                    .with_marker_sizes([5.0])
-                    .with_colors([Color::from_rgb(250, 250, 250)]),
-            )?;
-            let (t, v): (Vec<i64>, Vec<f64>) = event_marks.into_iter().unzip();
-            send_scalars(rec, &entity, t, v)?;
-        }
-        let texts: Vec<String> = run
-            .events
-            .iter()
-            .map(|e| {
-                let d = if e.description.is_empty() {
-                    String::new()
-                } else {
-                    format!(": {}", e.description)
-                };
-                format!("{} {} {}{d}", run.name, e.manoeuvre, e.phase)
-            })
-            .collect();
-        rec.send_columns(
-            format!("{root}/events"),
-            [sim_time(run.events.iter().map(|e| e.time_ns).collect())],
-            TextLog::update_fields()
-                .with_many_text(texts)
-                .columns_of_unit_batches()?,
+    Ok(())
+}
+
+/// Manoeuvre events: markers on the reading error, and a text log.
+fn log_events(
+    rec: &RecordingStream,
+    run: &RunData,
+    root: &str,
+    base: &str,
+    event_marks: Vec<(i64, f64)>,
+) -> Result<(), ViewError> {
+    if !event_marks.is_empty() {
+        let entity = format!("{base}/reading_error_deg/events");
+        rec.log_static(
+            entity.as_str(),
+            &SeriesPoints::new()
+                .with_names([format!("{} manoeuvres", run.name)])
+                .with_markers([rerun::components::MarkerShape::Diamond])
+                .with_marker_sizes([5.0])
+                .with_colors([Color::from_rgb(250, 250, 250)]),
         )?;
+        let (t, v): (Vec<i64>, Vec<f64>) = event_marks.into_iter().unzip();
+        send_scalars(rec, &entity, t, v)?;
     }
-    // The fitted damped sinusoid and its envelope over the fit's window, at the data's times.
-    if let Some(f) = fitted {
-        let (start, end) = ((f.start_s * 1e9) as i64, (f.end_s * 1e9) as i64);
-        let times: Vec<i64> = run
-            .compass
-            .time_ns
-            .iter()
-            .copied()
-            .filter(|&t| t >= start && t <= end)
-            .collect();
-        let ts = |t: i64| t as f64 * 1e-9;
-        let curves: [(&str, Vec<f64>, String); 3] = [
-            (
-                "fit",
-                times.iter().map(|&t| f.value(ts(t)).to_degrees()).collect(),
-                format!(
-                    "{} fit: period {:.0} s, decay {:.3e} /s",
-                    run.name, f.period_s, f.decay_rate_per_s
-                ),
+    let texts: Vec<String> = run
+        .events
+        .iter()
+        .map(|e| {
+            let d = if e.description.is_empty() {
+                String::new()
+            } else {
+                format!(": {}", e.description)
+            };
+            format!("{} {} {}{d}", run.name, e.manoeuvre, e.phase)
+        })
+        .collect();
+    rec.send_columns(
+        format!("{root}/events"),
+        [sim_time(run.events.iter().map(|e| e.time_ns).collect())],
+        TextLog::update_fields()
+            .with_many_text(texts)
+            .columns_of_unit_batches()?,
+    )?;
+    Ok(())
+}
+
+/// The fitted damped sinusoid and its envelope over the fit's window, at the data's times.
+fn log_fit(
+    rec: &RecordingStream,
+    run: &RunData,
+    run_index: usize,
+    base: &str,
+    f: &DampedSinusoid,
+) -> Result<(), ViewError> {
+    let (start, end) = ((f.start_s * 1e9) as i64, (f.end_s * 1e9) as i64);
+    let times: Vec<i64> = run
+        .compass
+        .time_ns
+        .iter()
+        .copied()
+        .filter(|&t| t >= start && t <= end)
+        .collect();
+    let ts = |t: i64| t as f64 * 1e-9;
+    let curves: [(&str, Vec<f64>, String); 3] = [
+        (
+            "fit",
+            times.iter().map(|&t| f.value(ts(t)).to_degrees()).collect(),
+            format!(
+                "{} fit: period {:.0} s, decay {:.3e} /s",
+                run.name, f.period_s, f.decay_rate_per_s
             ),
-            (
-                "envelope_upper",
-                times
-                    .iter()
-                    .map(|&t| f.envelope(ts(t)).1.to_degrees())
-                    .collect(),
-                format!("{} envelope", run.name),
-            ),
-            (
-                "envelope_lower",
-                times
-                    .iter()
-                    .map(|&t| f.envelope(ts(t)).0.to_degrees())
-                    .collect(),
-                format!("{} envelope", run.name),
-            ),
-        ];
-        for (leaf, values, name) in curves {
-            let entity = format!("{base}/reading_error_deg/{leaf}");
-            rec.log_static(
-                entity.as_str(),
-                &SeriesLines::new()
-                    .with_names([name])
-                    .with_colors([if leaf == "fit" {
-                        Color::from_rgb(255, 255, 255)
-                    } else {
-                        run_color(run_index, 150)
-                    }])
-                    .with_widths([if leaf == "fit" { 1.0 } else { 0.75 }]),
-            )?;
-            send_scalars(rec, &entity, times.clone(), values)?;
-        }
+        ),
+        (
+            "envelope_upper",
+            times
+                .iter()
+                .map(|&t| f.envelope(ts(t)).1.to_degrees())
+                .collect(),
+            format!("{} envelope", run.name),
+        ),
+        (
+            "envelope_lower",
+            times
+                .iter()
+                .map(|&t| f.envelope(ts(t)).0.to_degrees())
+                .collect(),
+            format!("{} envelope", run.name),
+        ),
+    ];
+    for (leaf, values, name) in curves {
+        let entity = format!("{base}/reading_error_deg/{leaf}");
+        rec.log_static(
+            entity.as_str(),
+            &SeriesLines::new()
+                .with_names([name])
+                .with_colors([if leaf == "fit" {
+                    Color::from_rgb(255, 255, 255)
+                } else {
+                    run_color(run_index, 150)
+                }])
+                .with_widths([if leaf == "fit" { 1.0 } else { 0.75 }]),
+        )?;
+        send_scalars(rec, &entity, times.clone(), values)?;
     }
-    Ok(SeriesSummary {
-        samples,
-        fit: fitted,
-    })
+    Ok(())
 }
 
 #[cfg(test)]

@@ -147,8 +147,22 @@ fn rrd_holds_bodies_poses_and_series_of_two_runs() {
     let d = dump(&py, &rrd);
     assert_eq!(d["recordings"], 1);
     assert_eq!(d["blueprints"], 1, "the layout travels in the file");
-    // The five time-series views open on the whole run: without a `TimeAxis.view_range`, Rerun
-    // shows a plot over more than a minute (this one is 600 s) as the time cursor ± 30 s.
+    check_time_axes(&d);
+    let full_t: Vec<i64> = (0..SAMPLES)
+        .map(|i| (i as f64 / RATE_HZ * 1e9).round() as i64)
+        .collect();
+
+    for run in ["alpha", "beta"] {
+        let root = format!("/runs/{run}");
+        check_bodies(&d, &root, &kept);
+        check_series(&d, &root, &full_t);
+        assert!(has_static(&d, &format!("{root}/about"), "TextDocument"));
+    }
+}
+
+/// The five time-series views open on the whole run: without a `TimeAxis.view_range`, Rerun
+/// shows a plot over more than a minute (this one is 600 s) as the time cursor ± 30 s.
+fn check_time_axes(d: &Value) {
     let time_axes: Vec<&String> = d["blueprint_entities"]
         .as_object()
         .expect("blueprint entities")
@@ -164,156 +178,155 @@ fn rrd_holds_bodies_poses_and_series_of_two_runs() {
         .map(|(path, _)| path)
         .collect();
     assert_eq!(time_axes.len(), 5, "{time_axes:?}");
-    let full_t: Vec<i64> = (0..SAMPLES)
-        .map(|i| (i as f64 / RATE_HZ * 1e9).round() as i64)
-        .collect();
+}
 
-    for run in ["alpha", "beta"] {
-        let root = format!("/runs/{run}");
-        // Every body, nested as its frames, posed at every kept sample with the recorded pose.
-        let mut path = format!("{root}/earth");
-        for (frame, _) in common::FRAMES {
-            path = format!("{path}/{frame}");
-            let (t, tr) = temporal(&d, &path, "translation");
-            let (tq, q) = temporal(&d, &path, "quaternion");
-            assert_eq!(t, kept, "{path}: translation times");
-            assert_eq!(tq, kept, "{path}: quaternion times");
-            for (i, &ns) in kept.iter().enumerate() {
-                let (want_t, want_q) = common::pose(frame, ns as f64 * 1e-9);
-                let got_t = f64s(&tr[i][0]);
-                let got_q = f64s(&q[i][0]);
-                for k in 0..3 {
-                    assert!((got_t[k] - want_t[k]).abs() < 1e-6, "{path} t[{i}]");
-                }
-                for k in 0..4 {
-                    assert!(
-                        (got_q[k] - want_q[k]).abs() < 1e-6,
-                        "{path} q[{i}] {got_q:?} {want_q:?}"
-                    );
-                }
+/// Every body of run `root`, nested as its frames, posed at every kept sample with the
+/// recorded pose; its shapes, the rotor's marker, the hull and the overlay arrows.
+fn check_bodies(d: &Value, root: &str, kept: &[i64]) {
+    let mut path = format!("{root}/earth");
+    for (frame, _) in common::FRAMES {
+        path = format!("{path}/{frame}");
+        let (t, tr) = temporal(&d, &path, "translation");
+        let (tq, q) = temporal(&d, &path, "quaternion");
+        assert_eq!(t, kept, "{path}: translation times");
+        assert_eq!(tq, kept, "{path}: quaternion times");
+        for (i, &ns) in kept.iter().enumerate() {
+            let (want_t, want_q) = common::pose(frame, ns as f64 * 1e-9);
+            let got_t = f64s(&tr[i][0]);
+            let got_q = f64s(&q[i][0]);
+            for k in 0..3 {
+                assert!((got_t[k] - want_t[k]).abs() < 1e-6, "{path} t[{i}]");
             }
-        }
-        // Shapes in the bodies' frames, the rotor's turning marker, the schematic hull.
-        let ship = format!("{root}/earth/ship");
-        assert!(has_static(&d, &format!("{ship}/gimbal/shape"), "Mesh3D"));
-        assert!(has_static(
-            &d,
-            &format!("{ship}/gimbal/float/shape"),
-            "Ellipsoids3D"
-        ));
-        assert!(has_static(
-            &d,
-            &format!("{ship}/gimbal/float/rotor/shape"),
-            "Cylinders3D"
-        ));
-        assert!(has_static(
-            &d,
-            &format!("{ship}/gimbal/float/rotor/spin_axis"),
-            "Arrows3D"
-        ));
-        assert!(has_static(
-            &d,
-            &format!("{ship}/hull_outline"),
-            "LineStrips3D"
-        ));
-        let (t, _) = temporal(
-            &d,
-            &format!("{ship}/gimbal/float/rotor/spin_marker"),
-            "quaternion",
-        );
-        assert_eq!(t, kept);
-        // True North, indicated North and the apparent vertical.
-        assert!(has_static(
-            &d,
-            &format!("{root}/overlay/true_north"),
-            "Arrows3D"
-        ));
-        for arrow in ["indicated_north", "apparent_vertical"] {
-            let (t, v) = temporal(&d, &format!("{root}/overlay/{arrow}"), "vectors");
-            assert_eq!(t, kept, "{arrow}");
-            assert_eq!(v.len(), kept.len());
-        }
-        // Under the 0.25 m/s² acceleration (300–320 s) the apparent vertical leans aft.
-        let (t, v) = temporal(&d, &format!("{root}/overlay/apparent_vertical"), "vectors");
-        let i = t
-            .iter()
-            .position(|&x| x == 310_000_000_000)
-            .expect("310 s kept");
-        let up = f64s(&v[i][0]);
-        let lean = up[0].atan2(up[2]);
-        assert!((lean - (0.25_f64).atan2(9.81)).abs() < 1e-5, "lean {lean}");
-
-        // Full-rate series, angles in degrees.
-        let series: [(&str, Expected); 5] = [
-            ("reading_error_deg", |t| {
-                common::reading_error(t).to_degrees()
-            }),
-            ("tilt_deg", |t| common::tilt(t).to_degrees()),
-            ("heading_deg/true", |_| 0.3_f64.to_degrees()),
-            ("speed_m_per_s", common::speed),
-            ("roll_deg", |t| common::roll(t).to_degrees()),
-        ];
-        for (leaf, f) in series {
-            let entity = format!("{root}/series/{leaf}");
-            let (t, v) = temporal(&d, &entity, "scalars");
-            assert_eq!(t, full_t, "{entity}: times");
-            let got = scalars(v);
-            for (k, &ns) in t.iter().enumerate() {
-                let want = f(ns as f64 * 1e-9);
+            for k in 0..4 {
                 assert!(
-                    (got[k] - want).abs() < 1e-9 * (1.0 + want.abs()),
-                    "{entity}[{k}] {} vs {want}",
-                    got[k]
+                    (got_q[k] - want_q[k]).abs() < 1e-6,
+                    "{path} q[{i}] {got_q:?} {want_q:?}"
                 );
             }
         }
-        let (t, _) = temporal(&d, &format!("{root}/series/heading_deg/compass"), "scalars");
-        assert_eq!(t.len(), SAMPLES);
-        // The fit and its envelope over the fit's window only.
-        let (t, v) = temporal(
-            &d,
-            &format!("{root}/series/reading_error_deg/fit"),
-            "scalars",
-        );
-        assert_eq!(t.len(), 801, "100..=500 s at 2 Hz");
-        assert_eq!(t[0], 100_000_000_000);
-        for (k, &ns) in t.iter().enumerate() {
-            let want = common::reading_error(ns as f64 * 1e-9).to_degrees();
-            assert!((scalars(v)[k] - want).abs() < 1e-9);
-        }
-        let (_, up) = temporal(
-            &d,
-            &format!("{root}/series/reading_error_deg/envelope_upper"),
-            "scalars",
-        );
-        let (_, lo) = temporal(
-            &d,
-            &format!("{root}/series/reading_error_deg/envelope_lower"),
-            "scalars",
-        );
-        let (up, lo) = (scalars(up), scalars(lo));
-        let a0 = (common::ERR_AMP * (-common::ERR_DECAY * 100.0).exp()).to_degrees();
-        assert!((up[0] - common::ERR_OFFSET.to_degrees() - a0).abs() < 1e-9);
-        assert!((lo[0] - common::ERR_OFFSET.to_degrees() + a0).abs() < 1e-9);
-        // Manoeuvre events: markers on the reading error and a text log.
-        let (t, v) = temporal(
-            &d,
-            &format!("{root}/series/reading_error_deg/events"),
-            "scalars",
-        );
-        assert_eq!(t, vec![300_000_000_000, 320_000_000_000]);
-        assert!((scalars(v)[0] - common::reading_error(300.0).to_degrees()).abs() < 1e-9);
-        let (t, v) = temporal(&d, &format!("{root}/events"), "text");
-        assert_eq!(t.len(), 2);
-        assert!(
-            v[0][0]
-                .as_str()
-                .is_some_and(|s| s.contains("speed_change start")),
-            "{:?}",
-            v[0]
-        );
-        assert!(has_static(&d, &format!("{root}/about"), "TextDocument"));
     }
+    // Shapes in the bodies' frames, the rotor's turning marker, the schematic hull.
+    let ship = format!("{root}/earth/ship");
+    assert!(has_static(&d, &format!("{ship}/gimbal/shape"), "Mesh3D"));
+    assert!(has_static(
+        &d,
+        &format!("{ship}/gimbal/float/shape"),
+        "Ellipsoids3D"
+    ));
+    assert!(has_static(
+        &d,
+        &format!("{ship}/gimbal/float/rotor/shape"),
+        "Cylinders3D"
+    ));
+    assert!(has_static(
+        &d,
+        &format!("{ship}/gimbal/float/rotor/spin_axis"),
+        "Arrows3D"
+    ));
+    assert!(has_static(
+        &d,
+        &format!("{ship}/hull_outline"),
+        "LineStrips3D"
+    ));
+    let (t, _) = temporal(
+        &d,
+        &format!("{ship}/gimbal/float/rotor/spin_marker"),
+        "quaternion",
+    );
+    assert_eq!(t, kept);
+    // True North, indicated North and the apparent vertical.
+    assert!(has_static(
+        &d,
+        &format!("{root}/overlay/true_north"),
+        "Arrows3D"
+    ));
+    for arrow in ["indicated_north", "apparent_vertical"] {
+        let (t, v) = temporal(&d, &format!("{root}/overlay/{arrow}"), "vectors");
+        assert_eq!(t, kept, "{arrow}");
+        assert_eq!(v.len(), kept.len());
+    }
+    // Under the 0.25 m/s² acceleration (300–320 s) the apparent vertical leans aft.
+    let (t, v) = temporal(&d, &format!("{root}/overlay/apparent_vertical"), "vectors");
+    let i = t
+        .iter()
+        .position(|&x| x == 310_000_000_000)
+        .expect("310 s kept");
+    let up = f64s(&v[i][0]);
+    let lean = up[0].atan2(up[2]);
+    assert!((lean - (0.25_f64).atan2(9.81)).abs() < 1e-5, "lean {lean}");
+}
+
+/// Run `root`'s full-rate series (angles in degrees), the fit and its envelope over the fit's
+/// window, and the manoeuvre events.
+fn check_series(d: &Value, root: &str, full_t: &[i64]) {
+    let series: [(&str, Expected); 5] = [
+        ("reading_error_deg", |t| {
+            common::reading_error(t).to_degrees()
+        }),
+        ("tilt_deg", |t| common::tilt(t).to_degrees()),
+        ("heading_deg/true", |_| 0.3_f64.to_degrees()),
+        ("speed_m_per_s", common::speed),
+        ("roll_deg", |t| common::roll(t).to_degrees()),
+    ];
+    for (leaf, f) in series {
+        let entity = format!("{root}/series/{leaf}");
+        let (t, v) = temporal(&d, &entity, "scalars");
+        assert_eq!(t, full_t, "{entity}: times");
+        let got = scalars(v);
+        for (k, &ns) in t.iter().enumerate() {
+            let want = f(ns as f64 * 1e-9);
+            assert!(
+                (got[k] - want).abs() < 1e-9 * (1.0 + want.abs()),
+                "{entity}[{k}] {} vs {want}",
+                got[k]
+            );
+        }
+    }
+    let (t, _) = temporal(&d, &format!("{root}/series/heading_deg/compass"), "scalars");
+    assert_eq!(t.len(), SAMPLES);
+    // The fit and its envelope over the fit's window only.
+    let (t, v) = temporal(
+        &d,
+        &format!("{root}/series/reading_error_deg/fit"),
+        "scalars",
+    );
+    assert_eq!(t.len(), 801, "100..=500 s at 2 Hz");
+    assert_eq!(t[0], 100_000_000_000);
+    for (k, &ns) in t.iter().enumerate() {
+        let want = common::reading_error(ns as f64 * 1e-9).to_degrees();
+        assert!((scalars(v)[k] - want).abs() < 1e-9);
+    }
+    let (_, up) = temporal(
+        &d,
+        &format!("{root}/series/reading_error_deg/envelope_upper"),
+        "scalars",
+    );
+    let (_, lo) = temporal(
+        &d,
+        &format!("{root}/series/reading_error_deg/envelope_lower"),
+        "scalars",
+    );
+    let (up, lo) = (scalars(up), scalars(lo));
+    let a0 = (common::ERR_AMP * (-common::ERR_DECAY * 100.0).exp()).to_degrees();
+    assert!((up[0] - common::ERR_OFFSET.to_degrees() - a0).abs() < 1e-9);
+    assert!((lo[0] - common::ERR_OFFSET.to_degrees() + a0).abs() < 1e-9);
+    // Manoeuvre events: markers on the reading error and a text log.
+    let (t, v) = temporal(
+        &d,
+        &format!("{root}/series/reading_error_deg/events"),
+        "scalars",
+    );
+    assert_eq!(t, vec![300_000_000_000, 320_000_000_000]);
+    assert!((scalars(v)[0] - common::reading_error(300.0).to_degrees()).abs() < 1e-9);
+    let (t, v) = temporal(&d, &format!("{root}/events"), "text");
+    assert_eq!(t.len(), 2);
+    assert!(
+        v[0][0]
+            .as_str()
+            .is_some_and(|s| s.contains("speed_change start")),
+        "{:?}",
+        v[0]
+    );
 }
 
 /// Quaternion product (x, y, z, w).

@@ -277,33 +277,15 @@ fn wait_for<T>(what: &str, limit: Duration, mut f: impl FnMut() -> Option<T>) ->
     }
 }
 
-#[test]
-fn ray_engine_on_a_local_cluster_matches_local_survives_kills_and_resumes() {
-    let Some(python) = gyro_testkit::venv("sweep-venv", &gyro_testkit::SWEEP) else {
-        return;
-    };
-    let dir = tmp("sweep", "ray");
-    let study = dir.join("study.toml");
-    std::fs::write(&study, STUDY).unwrap();
-    let study = study.display().to_string();
-    let slow = dir.join("slow.toml");
-    std::fs::write(&slow, SLOW).unwrap();
-    let slow = slow.display().to_string();
-
-    // The local engine's table: what every Ray sweep below must equal.
-    let local = dir.join("local");
-    succeed(
-        gyrolab()
-            .args(["sweep", "run", &study, "--out"])
-            .arg(&local)
-            .arg("--quiet"),
-    );
-    let reference = table(&local);
-    assert_eq!(reference.height(), 6);
-
-    let cluster = Cluster::start(&python);
-
-    // 1. The same study on Ray: the same table, the same recordings kept.
+/// 1. The same study on Ray: the same table, the same recordings kept, and pandas (through
+///    pyarrow) reads the table with its types.
+fn same_table_on_ray(
+    cluster: &Cluster,
+    python: &Path,
+    dir: &Path,
+    study: &str,
+    reference: &DataFrame,
+) {
     let on_ray = dir.join("ray");
     let out = succeed(
         cluster
@@ -351,8 +333,10 @@ fn ray_engine_on_a_local_cluster_matches_local_survives_kills_and_resumes() {
         "{text}"
     );
     assert!(f[4].contains("string"), "{text}");
+}
 
-    // 2. A worker killed mid-task: the task is retried, the sweep completes, nothing is left.
+/// 2. A worker killed mid-task: the task is retried, the sweep completes, nothing is left.
+fn worker_killed_mid_task(cluster: &Cluster, dir: &Path, slow: &str) {
     let killed = dir.join("killed");
     let needle = killed.display().to_string();
     let sweep = cluster
@@ -418,9 +402,11 @@ fn ray_engine_on_a_local_cluster_matches_local_survives_kills_and_resumes() {
         .map(|s| s.unwrap_or(""))
         .collect();
     assert_eq!(status, ["ok", "ok"]);
+}
 
-    // 3. The driver killed mid-sweep; the same command again finishes it, running only what
-    //    was missing, and the table equals the uninterrupted one.
+/// 3. The driver killed mid-sweep; the same command again finishes it, running only what was
+///    missing, and the table equals the uninterrupted one.
+fn driver_killed_and_resumed(cluster: &Cluster, dir: &Path, study: &str, reference: &DataFrame) {
     let resumed = dir.join("resumed");
     let sweep = cluster
         .gyrolab()
@@ -482,5 +468,36 @@ fn ray_engine_on_a_local_cluster_matches_local_survives_kills_and_resumes() {
         "resumed:\n{got}\nlocal:\n{reference}"
     );
     assert!(partial_files(&resumed).is_empty());
+}
+
+#[test]
+fn ray_engine_on_a_local_cluster_matches_local_survives_kills_and_resumes() {
+    let Some(python) = gyro_testkit::venv("sweep-venv", &gyro_testkit::SWEEP) else {
+        return;
+    };
+    let dir = tmp("sweep", "ray");
+    let study = dir.join("study.toml");
+    std::fs::write(&study, STUDY).unwrap();
+    let study = study.display().to_string();
+    let slow = dir.join("slow.toml");
+    std::fs::write(&slow, SLOW).unwrap();
+    let slow = slow.display().to_string();
+
+    // The local engine's table: what every Ray sweep below must equal.
+    let local = dir.join("local");
+    succeed(
+        gyrolab()
+            .args(["sweep", "run", &study, "--out"])
+            .arg(&local)
+            .arg("--quiet"),
+    );
+    let reference = table(&local);
+    assert_eq!(reference.height(), 6);
+
+    let cluster = Cluster::start(&python);
+
+    same_table_on_ray(&cluster, &python, &dir, &study, &reference);
+    worker_killed_mid_task(&cluster, &dir, &slow);
+    driver_killed_and_resumed(&cluster, &dir, &study, &reference);
     drop(cluster);
 }
