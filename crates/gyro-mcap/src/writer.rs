@@ -2,11 +2,12 @@
 //! records, chunking, indexes and the summary; also used by `recover` to re-emit raw messages).
 //!
 //! Why not the `mcap` crate's writer: on the same 1 512 000 messages (6 h of the throughput
-//! load, files checked to hold the same message bytes), in one run, it used 1.8× the CPU time of
-//! this writer at the same zstd level 3 (1.64 against 0.92 CPU s) and 4.6× that of this writer's
-//! default level −4, which it cannot use (it takes no negative level; at its level 1, 1.14 CPU s
-//! for a 5 % larger file); wall time was 54 s against 2.0 s on a machine loaded by other builds
-//! (load average 13 on 2 cores). `cargo bench -p gyro-mcap --bench vs_mcap`.
+//! load, files checked to hold the same message bytes), in one run (2026-12-02, 2 cores shared
+//! with a build), it used 1.5× the CPU time of this writer at the same zstd level 3 (1.01
+//! against 0.66 CPU s; wall 1.13 against 0.66 s) and 3.3× that of this writer's default level
+//! −4, which it cannot use (it takes no negative level; at its level 1, 0.79 CPU s for a 5 %
+//! larger file, against 0.31). Outside 1.5× at the levels each runs by default, so this writer
+//! stays. `cargo bench -p gyro-mcap --bench vs_mcap`.
 
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
