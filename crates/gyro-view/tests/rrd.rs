@@ -186,8 +186,8 @@ fn check_bodies(d: &Value, root: &str, kept: &[i64]) {
     let mut path = format!("{root}/earth");
     for (frame, _) in common::FRAMES {
         path = format!("{path}/{frame}");
-        let (t, tr) = temporal(&d, &path, "translation");
-        let (tq, q) = temporal(&d, &path, "quaternion");
+        let (t, tr) = temporal(d, &path, "translation");
+        let (tq, q) = temporal(d, &path, "quaternion");
         assert_eq!(t, kept, "{path}: translation times");
         assert_eq!(tq, kept, "{path}: quaternion times");
         for (i, &ns) in kept.iter().enumerate() {
@@ -207,46 +207,46 @@ fn check_bodies(d: &Value, root: &str, kept: &[i64]) {
     }
     // Shapes in the bodies' frames, the rotor's turning marker, the schematic hull.
     let ship = format!("{root}/earth/ship");
-    assert!(has_static(&d, &format!("{ship}/gimbal/shape"), "Mesh3D"));
+    assert!(has_static(d, &format!("{ship}/gimbal/shape"), "Mesh3D"));
     assert!(has_static(
-        &d,
+        d,
         &format!("{ship}/gimbal/float/shape"),
         "Ellipsoids3D"
     ));
     assert!(has_static(
-        &d,
+        d,
         &format!("{ship}/gimbal/float/rotor/shape"),
         "Cylinders3D"
     ));
     assert!(has_static(
-        &d,
+        d,
         &format!("{ship}/gimbal/float/rotor/spin_axis"),
         "Arrows3D"
     ));
     assert!(has_static(
-        &d,
+        d,
         &format!("{ship}/hull_outline"),
         "LineStrips3D"
     ));
     let (t, _) = temporal(
-        &d,
+        d,
         &format!("{ship}/gimbal/float/rotor/spin_marker"),
         "quaternion",
     );
     assert_eq!(t, kept);
     // True North, indicated North and the apparent vertical.
     assert!(has_static(
-        &d,
+        d,
         &format!("{root}/overlay/true_north"),
         "Arrows3D"
     ));
     for arrow in ["indicated_north", "apparent_vertical"] {
-        let (t, v) = temporal(&d, &format!("{root}/overlay/{arrow}"), "vectors");
+        let (t, v) = temporal(d, &format!("{root}/overlay/{arrow}"), "vectors");
         assert_eq!(t, kept, "{arrow}");
         assert_eq!(v.len(), kept.len());
     }
     // Under the 0.25 m/s² acceleration (300–320 s) the apparent vertical leans aft.
-    let (t, v) = temporal(&d, &format!("{root}/overlay/apparent_vertical"), "vectors");
+    let (t, v) = temporal(d, &format!("{root}/overlay/apparent_vertical"), "vectors");
     let i = t
         .iter()
         .position(|&x| x == 310_000_000_000)
@@ -270,7 +270,7 @@ fn check_series(d: &Value, root: &str, full_t: &[i64]) {
     ];
     for (leaf, f) in series {
         let entity = format!("{root}/series/{leaf}");
-        let (t, v) = temporal(&d, &entity, "scalars");
+        let (t, v) = temporal(d, &entity, "scalars");
         assert_eq!(t, full_t, "{entity}: times");
         let got = scalars(v);
         for (k, &ns) in t.iter().enumerate() {
@@ -282,11 +282,11 @@ fn check_series(d: &Value, root: &str, full_t: &[i64]) {
             );
         }
     }
-    let (t, _) = temporal(&d, &format!("{root}/series/heading_deg/compass"), "scalars");
+    let (t, _) = temporal(d, &format!("{root}/series/heading_deg/compass"), "scalars");
     assert_eq!(t.len(), SAMPLES);
     // The fit and its envelope over the fit's window only.
     let (t, v) = temporal(
-        &d,
+        d,
         &format!("{root}/series/reading_error_deg/fit"),
         "scalars",
     );
@@ -297,12 +297,12 @@ fn check_series(d: &Value, root: &str, full_t: &[i64]) {
         assert!((scalars(v)[k] - want).abs() < 1e-9);
     }
     let (_, up) = temporal(
-        &d,
+        d,
         &format!("{root}/series/reading_error_deg/envelope_upper"),
         "scalars",
     );
     let (_, lo) = temporal(
-        &d,
+        d,
         &format!("{root}/series/reading_error_deg/envelope_lower"),
         "scalars",
     );
@@ -312,13 +312,13 @@ fn check_series(d: &Value, root: &str, full_t: &[i64]) {
     assert!((lo[0] - common::ERR_OFFSET.to_degrees() + a0).abs() < 1e-9);
     // Manoeuvre events: markers on the reading error and a text log.
     let (t, v) = temporal(
-        &d,
+        d,
         &format!("{root}/series/reading_error_deg/events"),
         "scalars",
     );
     assert_eq!(t, vec![300_000_000_000, 320_000_000_000]);
     assert!((scalars(v)[0] - common::reading_error(300.0).to_degrees()).abs() < 1e-9);
-    let (t, v) = temporal(&d, &format!("{root}/events"), "text");
+    let (t, v) = temporal(d, &format!("{root}/events"), "text");
     assert_eq!(t.len(), 2);
     assert!(
         v[0][0]
