@@ -378,6 +378,23 @@ fn generalised_forces<T: Real, const N: usize>(
                 *qi += k.jw[i].dot(&tau).v;
             }
         }
+        if let Force::LinkSpring {
+            bodies,
+            points,
+            stiffness,
+            length,
+            tension,
+            ..
+        } = f
+        {
+            // The attachment points from this walk's own poses (world axes).
+            let at = |e: usize| {
+                let k = &kin[bodies[e]];
+                k.p.add(&k.r.mul_v(&V3::from_f64(points[e])))
+            };
+            let d = force_elements::distance(&at(0), &at(1));
+            *v += force_elements::link_spring_energy(d, *stiffness, *length, *tension);
+        }
     }
 }
 
