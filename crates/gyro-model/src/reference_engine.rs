@@ -334,8 +334,9 @@ impl<T: Real> RateTerms<T> for FlatK<'_, T> {
 }
 
 /// The force elements: the coordinate-space ones (`force_elements`: dampers into K, springs
-/// into V, generalised forces and servos into Q) and body forces, their moments about the pivot
-/// on each body's Jacobian.
+/// into V, generalised forces and servos into Q), body forces, their moments about the pivot
+/// on each body's Jacobian, and springs between two bodies, into V from the distance of their
+/// points as this walk poses them.
 fn generalised_forces<T: Real, const N: usize>(
     chain: &Chain,
     q_real: &[T],
