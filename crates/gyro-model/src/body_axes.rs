@@ -27,7 +27,7 @@
 use crate::design::{Design, Force};
 use crate::dual::{Jet, M3, Real, V3};
 use crate::expr::QuadExpr;
-use crate::force_elements::{self, RateTerms, SpringsInto};
+use crate::force_elements::{self, LinkWalk, RateTerms, SpringsInto};
 use crate::reference_engine::{Chain, EvalInput, EvalOutput, evaluate_pots_any};
 
 mod rates;
@@ -130,6 +130,8 @@ pub struct BodyAxesChain {
     frames: Vec<Frame>,
     /// Dampers, springs and generalised forces (coordinate-space elements).
     forces: Vec<Force>,
+    /// Springs between two bodies, each with its ends' paths from the base.
+    links: Vec<LinkWalk>,
     /// The world-axes chain down to the carriers of communicating pots, whose share of the
     /// equations the reference engine forms (`pots_terms`); `None` without pots.
     pots: Option<Chain>,
@@ -291,6 +293,7 @@ impl BodyAxesChain {
         BodyAxesChain {
             n: d.coordinates.len(),
             frames,
+            links: LinkWalk::of(d, &forces),
             forces,
             pots: (!d.pots.is_empty()).then(|| Chain::from_design(d, |_| false)),
         }
@@ -554,6 +557,10 @@ pub fn evaluate<T: Real, const N: usize>(
         &mut v,
         &mut qf,
     );
+    // Springs between two bodies: their distance from a short walk in base axes.
+    for link in &kin.links {
+        v += link.energy(&q[..n]);
+    }
 
     for i in 0..n {
         c_out[i] = qf[i] - bt[i] + t2.d[i] + t0.d[i] - v.d[i];

@@ -166,7 +166,7 @@ impl Effects {
         match f {
             Force::Damper { .. } => self.friction,
             Force::BodyForce { .. } | Force::Generalized { .. } => self.damper,
-            Force::Spring { .. } | Force::Servo { .. } => true,
+            Force::Spring { .. } | Force::LinkSpring { .. } | Force::Servo { .. } => true,
         }
     }
 }
@@ -1568,7 +1568,9 @@ impl<M: ShipMotion> CompiledModel<M> {
             ..self.chain.clone()
         };
         let (_, k_ns, c_ns, _) = eval(&only(|f| !matches!(f, Force::Servo { .. })));
-        let (_, k_c, c_c, _) = eval(&only(|f| matches!(f, Force::Spring { .. })));
+        let (_, k_c, c_c, _) = eval(&only(|f| {
+            matches!(f, Force::Spring { .. } | Force::LinkSpring { .. })
+        }));
         let mut e = Energetics {
             energy_j: t2 - t0 + v,
             kinetic_j: t2,

@@ -334,8 +334,9 @@ impl<T: Real> RateTerms<T> for FlatK<'_, T> {
 }
 
 /// The force elements: the coordinate-space ones (`force_elements`: dampers into K, springs
-/// into V, generalised forces and servos into Q) and body forces, their moments about the pivot
-/// on each body's Jacobian.
+/// into V, generalised forces and servos into Q), body forces, their moments about the pivot
+/// on each body's Jacobian, and springs between two bodies, into V from the distance of their
+/// points as this walk poses them.
 fn generalised_forces<T: Real, const N: usize>(
     chain: &Chain,
     q_real: &[T],
@@ -377,6 +378,23 @@ fn generalised_forces<T: Real, const N: usize>(
             for (i, qi) in qf.iter_mut().enumerate().take(n) {
                 *qi += k.jw[i].dot(&tau).v;
             }
+        }
+        if let Force::LinkSpring {
+            bodies,
+            points,
+            stiffness,
+            length,
+            tension,
+            ..
+        } = f
+        {
+            // The attachment points from this walk's own poses (world axes).
+            let at = |e: usize| {
+                let k = &kin[bodies[e]];
+                k.p.add(&k.r.mul_v(&V3::from_f64(points[e])))
+            };
+            let d = force_elements::distance(&at(0), &at(1));
+            *v += force_elements::link_spring_energy(d, *stiffness, *length, *tension);
         }
     }
 }

@@ -427,6 +427,189 @@ impl Slough {
     }
 }
 
+/// The Sperry twin-gyro 1918 (Beghin ch. V, §54–58): West gyro (pendulous ap, spin North) and
+/// East gyro (2ap, spin South) l either side of the frame, the East one on a torsion wire of
+/// stiffness M, a spring of rate k between arms c below the pivots, the frame servo-driven to
+/// follow the West ring. In the text's coordinates x = kl², y = M, and IΩr = u√(ap) (eq. 23).
+#[derive(Clone, Debug)]
+pub struct TwinGyro {
+    /// IΩ of each gyro, N·m·s.
+    pub spin_momentum: f64,
+    /// ap, the West box's pendulous moment, N·m (the East box's is 2ap).
+    pub pendulous_moment: f64,
+    /// The East box's pendulous moment as built, N·m (2ap in the text).
+    pub east_pendulous_moment: f64,
+    /// k, N/m; l, c, m.
+    pub spring_rate: f64,
+    pub half_spacing: f64,
+    pub spring_depth: f64,
+    /// T₀ at the drawn length, N.
+    pub spring_tension: f64,
+    /// M, N·m/rad, and the pre-torque N, N·m.
+    pub wire_stiffness: f64,
+    pub wire_pretorque: f64,
+    pub latitude_rad: f64,
+}
+
+impl TwinGyro {
+    /// The constants of a design built like `designs/sperry-twin-1918.toml`, read from its
+    /// bodies and forces (not from the parameters that chose them): the rotor of body
+    /// `west_rotor`, the boxes `west_box` and `east_box` (their weight's moment about the
+    /// pivot), the `link_spring` (k, and l and c from its first attachment point) and the
+    /// `spring` named `torsion_wire` (M, N). `None` if something is missing.
+    pub fn from_design(d: &crate::Design, latitude_rad: f64) -> Option<TwinGyro> {
+        let g = STANDARD_GRAVITY_M_PER_S2;
+        let rotor = d.bodies[d.body_index("west_rotor")?].rotor.as_ref()?;
+        let moment = |name: &str| -> Option<f64> {
+            let b = &d.bodies[d.body_index(name)?];
+            Some(-g * b.mass_kg * b.cg_m[2])
+        };
+        let (k, point, tension) = d.forces.iter().find_map(|f| match f {
+            crate::Force::LinkSpring {
+                stiffness,
+                points,
+                tension,
+                ..
+            } => Some((*stiffness, points[0], *tension)),
+            _ => None,
+        })?;
+        let (m, n) = d.forces.iter().find_map(|f| match f {
+            crate::Force::Spring {
+                name,
+                stiffness,
+                preload,
+                ..
+            } if name == "torsion_wire" => Some((*stiffness, *preload)),
+            _ => None,
+        })?;
+        Some(TwinGyro {
+            spin_momentum: rotor.polar_inertia_kg_m2 * rotor.spin_rad_per_s,
+            pendulous_moment: moment("west_box")?,
+            east_pendulous_moment: moment("east_box")?,
+            spring_rate: k,
+            half_spacing: point[1].abs(),
+            spring_depth: -point[2],
+            spring_tension: tension,
+            wire_stiffness: m,
+            wire_pretorque: n,
+            latitude_rad,
+        })
+    }
+    /// τ = IΩε cos L, N·m.
+    pub fn tau(&self) -> f64 {
+        self.spin_momentum * EARTH_RATE_RAD_PER_S * self.latitude_rad.cos()
+    }
+    /// σ = IΩε sin L, N·m.
+    pub fn sigma(&self) -> f64 {
+        self.spin_momentum * EARTH_RATE_RAD_PER_S * self.latitude_rad.sin()
+    }
+    /// x = kl², N·m.
+    pub fn x(&self) -> f64 {
+        self.spring_rate * self.half_spacing * self.half_spacing
+    }
+    /// y = M, N·m.
+    pub fn y(&self) -> f64 {
+        self.wire_stiffness
+    }
+    /// klc, N·m: the servo's coupling through c.
+    pub fn klc(&self) -> f64 {
+        self.spring_rate * self.half_spacing * self.spring_depth
+    }
+    /// γ_c = klc/√(ap), √(N·m).
+    fn gamma(&self) -> f64 {
+        self.klc() / self.pendulous_moment.sqrt()
+    }
+    /// The characteristic quartic in u (coefficients lowest first; eq. 24 for c = 0, with the
+    /// c ≠ 0 terms γ_c u(2u² + 3y − 4τ) − 6γ_c²τ of the digest for c ≠ 0).
+    pub fn quartic(&self) -> [f64; 5] {
+        let (x, y, t, g) = (self.x(), self.y(), self.tau(), self.gamma());
+        [
+            2.0 * t * (y + 2.0 * x - t) - 6.0 * g * g * t,
+            g * (3.0 * y - 4.0 * t),
+            2.0 * y + x - t,
+            2.0 * g,
+            1.0,
+        ]
+    }
+    /// The quartic's roots as r = u√(ap)/IΩ, 1/s, the long-period pair first.
+    pub fn roots(&self) -> [(f64, f64); 4] {
+        let s = self.pendulous_moment.sqrt() / self.spin_momentum;
+        let mut r: Vec<(f64, f64)> = polynomial_roots(&self.quartic())
+            .into_iter()
+            .map(|(a, b)| (a * s, b * s))
+            .collect();
+        r.sort_by(|p, q| p.0.hypot(p.1).total_cmp(&q.0.hypot(q.1)));
+        [r[0], r[1], r[2], r[3]]
+    }
+    /// The roots of the gyro-dominated equations (22) themselves (the 4 × 4 system in ζ, θ, α,
+    /// β with IΩ the only inertia), keeping the τ-beside-ap and kc² terms the quartic drops.
+    pub fn reduced_model_roots(&self) -> [(f64, f64); 4] {
+        let (x, y, t, kap) = (self.x(), self.y(), self.tau(), self.klc());
+        let kc2 = self.spring_rate * self.spring_depth * self.spring_depth;
+        let (ap, ap2) = (self.pendulous_moment, self.east_pendulous_moment);
+        let h = self.spin_momentum;
+        // Rows: IΩζ′, IΩθ′, IΩα′, IΩβ′; columns ζ, θ, α, β.
+        let a = [
+            [-kap, kap, -(ap + t) - kc2, kc2],
+            [-kap, kap, -kc2, ap2 - t + kc2],
+            [t - x, x, -kap, kap],
+            [x + y, t - x - y, kap, -kap],
+        ];
+        let flat: Vec<f64> = a.iter().flatten().map(|v| v / h).collect();
+        let mut r = crate::linalg::eigenvalues(&flat, 4);
+        r.sort_by(|p, q| p.0.hypot(p.1).total_cmp(&q.0.hypot(q.1)));
+        [r[0], r[1], r[2], r[3]]
+    }
+    /// The two periods 2π/|Im r| (2πIΩ/√(ap z₁,₂) for c = 0), long first, s.
+    pub fn periods(&self) -> [f64; 2] {
+        let r = self.roots();
+        [TAU / r[0].1.abs(), TAU / r[2].1.abs()]
+    }
+    /// The two damping factors −Re r, long-period mode first, 1/s. They sum to klc/IΩ.
+    pub fn damping_factors(&self) -> [f64; 2] {
+        let r = self.roots();
+        [-r[0].0, -r[2].0]
+    }
+    /// The West gyro alone (no spring, no East gyro): IΩζ′ = −(ap + τ)α, IΩα′ = τζ, s.
+    pub fn west_alone_period(&self) -> f64 {
+        TAU * self.spin_momentum / ((self.pendulous_moment + self.tau()) * self.tau()).sqrt()
+    }
+    /// The wire stiffness on the hyperbola H at this design's x and τ, N·m:
+    /// M = τ − x + √(x² + 6τx + τ²).
+    pub fn hyperbola_wire_stiffness(&self) -> f64 {
+        let (x, t) = (self.x(), self.tau());
+        t - x + (x * x + 6.0 * t * x + t * t).sqrt()
+    }
+    /// The wire stiffness on the parabola P at this design's x and τ (the larger root of
+    /// (2y + x − τ)² = 8τ(y + 2x − τ) in y, N·m), where the two periods meet.
+    pub fn parabola_wire_stiffness(&self) -> f64 {
+        let (x, t) = (self.x(), self.tau());
+        // 4y² + 4y(x − τ) + (x − τ)² − 8τy − 16τx + 8τ² = 0
+        let (a, b, c) = (
+            4.0,
+            4.0 * (x - t) - 8.0 * t,
+            (x - t) * (x - t) - 16.0 * t * x + 8.0 * t * t,
+        );
+        (-b + (b * b - 4.0 * a * c).max(0.0).sqrt()) / (2.0 * a)
+    }
+    /// The wire's pre-torque that puts the equilibrium at ζ = 0 (eq. 21, no surcharge):
+    /// N = (τ − M)[−(3c/2l)σ/ap − T₀/(kl)], N·m.
+    pub fn zero_error_pretorque(&self) -> f64 {
+        let (l, c) = (self.half_spacing, self.spring_depth);
+        (self.tau() - self.wire_stiffness)
+            * (-1.5 * c / l * self.sigma() / self.pendulous_moment
+                - self.spring_tension / (self.spring_rate * l))
+    }
+    /// The factor of the text on the single-frame mean rolling error after compensation (54):
+    /// (2/3)[2ap(y − x − τ) + 3kc²(y − τ)]/[2ap(y + 2x − τ) + 3kc²(y − τ)], → 2/3 as M ≫ x, τ.
+    pub fn rolling_factor(&self) -> f64 {
+        let (x, y, t, ap) = (self.x(), self.y(), self.tau(), self.pendulous_moment);
+        let kc2 = self.spring_rate * self.spring_depth * self.spring_depth;
+        2.0 / 3.0 * (2.0 * ap * (y - x - t) + 3.0 * kc2 * (y - t))
+            / (2.0 * ap * (y + 2.0 * x - t) + 3.0 * kc2 * (y - t))
+    }
+}
+
 /// Roots of Σ cᵢ rⁱ (coefficients lowest first) as (re, im), by the companion matrix, then
 /// polished by complex Newton on the polynomial (so tiny roots next to huge ones keep their
 /// relative accuracy).

@@ -12,8 +12,7 @@ macro_rules! shipped {
 }
 
 /// Shipped designs: (name, TOML text).
-pub const DESIGNS: &[(&str, &str)] =
-    shipped!("designs"; "foucault-gyroscope", "anschutz-1906", "sperry-1911", "slough");
+pub const DESIGNS: &[(&str, &str)] = shipped!("designs"; "foucault-gyroscope", "anschutz-1906", "sperry-1911", "slough", "sperry-twin-1918");
 
 /// Shipped scenes: (name, TOML text).
 pub const SCENES: &[(&str, &str)] = shipped!("scenes";
@@ -27,6 +26,9 @@ pub const SCENES: &[(&str, &str)] = shipped!("scenes";
     "slough-harbour-0n", "slough-harbour-35n", "slough-harbour-60n",
     "slough-run-north-30kn", "slough-speed-change-20kn", "slough-turn-90", "slough-turn-180",
     "slough-zigzag-45", "slough-rolling-cardinal", "slough-rolling-intercardinal",
+    "twin-harbour-0n", "twin-harbour-35n", "twin-harbour-60n",
+    "twin-run-north-30kn", "twin-speed-change-20kn", "twin-turn-90", "twin-turn-180",
+    "twin-zigzag-45", "twin-rolling-cardinal", "twin-rolling-intercardinal",
 );
 
 /// One-line description of a TOML file (its `description` key).

@@ -138,7 +138,7 @@ fn body_axes_engine_matches_the_reference_on_every_shipped_scene() {
 /// Every path of the body-axes engine in one (physically arbitrary) chain.
 const ODD_DESIGN: &str = r#"
 name = "odd-chain"
-description = "test chain: branches, joint rotations, offsets, merged bodies, servo, forces"
+description = "test chain: branches, joint rotations, offsets, merged bodies, servo, forces, a spring between two branches"
 root = "earth"
 
 [[coordinate]]
@@ -237,6 +237,15 @@ kind = "generalized"
 name = "torque"
 coordinate = "b"
 torque_n_m = "0.003 * a - 0.001 * a * e"
+
+[[force]]
+kind = "link_spring"
+name = "tie"
+bodies = ["pendant", "tip"]
+points_m = [[0.01, -0.02, -0.05], [0.04, 0.01, 0.0]]
+stiffness_n_per_m = 3.0
+length_m = 0.05
+tension_n = 0.2
 
 [reading]
 body = "inner"

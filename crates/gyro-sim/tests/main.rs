@@ -18,4 +18,5 @@ mod slough;
 mod solvers;
 mod solvers_alloc;
 mod sperry;
+mod twin_gyro;
 mod villarceau;

@@ -258,6 +258,8 @@ pub fn demo(out: &Path, json: bool) -> Result<ExitCode, CliError> {
         "sperry-speed-change-20kn",
         "slough-harbour-35n",
         "slough-speed-change-20kn",
+        "twin-harbour-35n",
+        "twin-speed-change-20kn",
     ];
     let mut rows = Vec::new();
     let mut lines = Table::new(&[
@@ -491,7 +493,7 @@ pub fn compare(
 
 /// The baseline scene set: small and fast, covering settling, speed error, a speed change and
 /// the exact Foucault reference, for every compass that has them.
-pub const REGRESS_SCENES: [&str; 8] = [
+pub const REGRESS_SCENES: [&str; 10] = [
     "foucault-azimuth-45n",
     "harbour-50n",
     "run-north-30kn",
@@ -500,6 +502,8 @@ pub const REGRESS_SCENES: [&str; 8] = [
     "sperry-speed-change-20kn",
     "slough-harbour-35n",
     "slough-speed-change-20kn",
+    "twin-harbour-35n",
+    "twin-speed-change-20kn",
 ];
 
 pub fn regress(

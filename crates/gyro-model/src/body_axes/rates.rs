@@ -145,6 +145,9 @@ pub fn evaluate_rates<T: Real, const N: usize>(
         &mut lagrangian,
         &mut qf,
     );
+    for link in &kin.links {
+        lagrangian -= link.energy(&q[..n]);
+    }
 
     for i in 0..n {
         r_out[i] = qf[i] - pt[i] + lagrangian.d[i] - p[i].d[0] + damping[i];

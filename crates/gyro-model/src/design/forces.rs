@@ -42,6 +42,17 @@ pub(super) enum ForceFile {
         coordinate: String,
         torque_n_m: String,
     },
+    /// A spring between two bodies attached at a point of each (the twin-gyro's HH′): tension
+    /// `tension_n + stiffness_n_per_m·(d − length_m)` at the points' distance d.
+    LinkSpring {
+        name: String,
+        bodies: [String; 2],
+        points_m: [[f64; 3]; 2],
+        stiffness_n_per_m: f64,
+        length_m: f64,
+        #[serde(default)]
+        tension_n: f64,
+    },
 }
 
 /// The forces in order, names unique.
@@ -97,6 +108,26 @@ pub(super) fn forces(
             ForceFile::Generalized { name, coordinate, torque_n_m } => {
                 let ci = coord_names.iter().position(|c| c == coordinate).ok_or_else(|| bad(name, "coordinate", format!("unknown coordinate `{coordinate}` (allowed: {})", coord_names.join(", "))))?;
                 Force::Generalized { name: name.clone(), coordinate: ci, torque: parse_e(torque_n_m, name, "torque_n_m")? }
+            }
+            ForceFile::LinkSpring { name, bodies, points_m, stiffness_n_per_m, length_m, tension_n } => {
+                let index = |b: &String| body_names.iter().position(|n| n == b).ok_or_else(|| bad(name, "bodies", format!("unknown body `{b}` (allowed: {})", body_names.join(", "))));
+                let ends = [index(&bodies[0])?, index(&bodies[1])?];
+                if ends[0] == ends[1] {
+                    return Err(bad(name, "bodies", format!("both ends on `{}` (allowed: two different bodies; a spring within one body does no work)", bodies[0])));
+                }
+                if !points_m.iter().flatten().all(|x| x.is_finite()) {
+                    return Err(bad(name, "points_m", "attachment points must be finite".into()));
+                }
+                if !(*stiffness_n_per_m >= 0.0 && stiffness_n_per_m.is_finite()) {
+                    return Err(bad(name, "stiffness_n_per_m", format!("{stiffness_n_per_m} is out of range (allowed: finite, ≥ 0)")));
+                }
+                if !(*length_m > 0.0 && length_m.is_finite()) {
+                    return Err(bad(name, "length_m", format!("{length_m} is out of range (allowed: finite, > 0: the length at which the tension is `tension_n`)")));
+                }
+                if !tension_n.is_finite() {
+                    return Err(bad(name, "tension_n", format!("{tension_n} is out of range (allowed: finite)")));
+                }
+                Force::LinkSpring { name: name.clone(), bodies: ends, points: *points_m, stiffness: *stiffness_n_per_m, length: *length_m, tension: *tension_n }
             }
         });
     }

@@ -17,6 +17,7 @@ mod document;
 mod forces;
 mod pots;
 mod reading;
+mod stability;
 
 use crate::error::{InputError, locate};
 use crate::expr::QuadExpr;
@@ -27,6 +28,8 @@ use forces::ForceFile;
 use pots::PotsFile;
 use reading::ReadingFile;
 use serde::Deserialize;
+pub use stability::StabilityCondition;
+use stability::StabilityFile;
 use std::collections::BTreeMap;
 
 /// How the rotor's spin is maintained.
@@ -120,6 +123,12 @@ struct DesignFile {
     #[serde(default)]
     pots: Vec<PotsFile>,
     reading: ReadingFile,
+    #[serde(default)]
+    stability: Vec<StabilityFile>,
+    /// Load the design even if a `[[stability]]` margin is ≤ 0 (set by a scene's
+    /// `[compass] allow_unstable = true`).
+    #[serde(default)]
+    allow_unstable: bool,
 }
 
 /// A coordinate of the chain.
@@ -231,7 +240,7 @@ pub struct Motor {
 }
 
 /// A force element. The variants are the TOML kinds (`damper`, `spring`, `body_force`,
-/// `generalized`).
+/// `generalized`, `link_spring`).
 #[allow(clippy::enum_variant_names)]
 #[derive(Clone, Debug, PartialEq)]
 pub enum Force {
@@ -259,6 +268,18 @@ pub enum Force {
         coordinate: usize,
         torque: QuadExpr,
     },
+    /// A spring between two bodies, attached at a point of each (body frame, m): its tension is
+    /// `tension + stiffness·(d − length)` at the points' distance d, its potential
+    /// V = tension·(d − length) + ½·stiffness·(d − length)². Each engine forms d from its own
+    /// kinematics of the two points.
+    LinkSpring {
+        name: String,
+        bodies: [usize; 2],
+        points: [[f64; 3]; 2],
+        stiffness: f64,
+        length: f64,
+        tension: f64,
+    },
     /// A finite-gain (PD) servo: its motor turns `coordinate` toward the linear `relation` with
     /// the torque −k(q − r(q)) − c(q̇ − ṙ), reacting on the carrier, not on the driver (so it is
     /// a torque on this coordinate's equation only). [`Design::with_pd_servos`] makes these from
@@ -279,6 +300,7 @@ impl Force {
             | Force::Spring { name, .. }
             | Force::BodyForce { name, .. }
             | Force::Generalized { name, .. }
+            | Force::LinkSpring { name, .. }
             | Force::Servo { name, .. } => name,
         }
     }
@@ -302,6 +324,8 @@ pub struct Design {
     pub pots: Vec<Pots>,
     pub reading_body: usize,
     pub reading_axis: [f64; 3],
+    /// The `[[stability]]` conditions, evaluated (all met unless the design allows otherwise).
+    pub stability: Vec<StabilityCondition>,
     /// The TOML text the design was read from (recorded with every run).
     pub source_text: String,
 }
@@ -425,6 +449,7 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
         coordinates[p.level].unit = CoordinateUnit::Metre;
     }
     let (reading_body, reading_axis) = reading::reading(&f.reading, &body_names, &src)?;
+    let stability = stability::stability(&f.stability, f.allow_unstable, &src)?;
     Ok(Design {
         name: f.name,
         description: f.description,
@@ -437,6 +462,7 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
         pots,
         reading_body,
         reading_axis,
+        stability,
         source_text: text.to_string(),
     })
 }

@@ -34,6 +34,10 @@ pub(super) struct CompassFile {
     /// default) or `{ kind = "pd", stiffness_n_m_per_rad, damping_n_m_s_per_rad }`.
     #[serde(default)]
     servo: Option<ServoFile>,
+    /// Run the design even outside the stable region its `[[stability]]` entries state (to
+    /// show the instability on purpose); otherwise such a design is refused.
+    #[serde(default)]
+    allow_unstable: bool,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -86,6 +90,9 @@ pub(super) fn design(
         .is_some();
     if has_dial && !overrides.iter().any(|(k, _)| *k == dial) {
         overrides.push((dial, toml::Value::Float(latitude_deg)));
+    }
+    if c.allow_unstable {
+        overrides.push(("allow_unstable".into(), toml::Value::Boolean(true)));
     }
     let design = Design::from_toml(&label, &design_text, &overrides)?;
     Ok(LoadedDesign {

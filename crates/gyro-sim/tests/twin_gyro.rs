@@ -1,0 +1,511 @@
+//! The Sperry twin-gyro 1918 (`designs/sperry-twin-1918.toml`) against Beghin's closed forms
+//! (ch. V, §54–58; `shared/physics/twin-and-three-gyro.md` §1), each computed from the design's
+//! own numbers by `theory::TwinGyro`: the equilibrium the latitude corrector sets (eqs. 19–21),
+//! the two periods of the quartic (eq. 24 and its c ≠ 0 form) from the linear modes and from
+//! simulated swings, both shorter than the West gyro alone, no damping without c, the damping
+//! factors' sum klc/IΩ, the stability hyperbola H on both sides, the beats near the parabola P,
+//! and the refusal of a design outside the stable region.
+
+use crate::support::*;
+use gyro_model::theory::{TwinGyro, polynomial_roots};
+use gyro_model::{
+    CompiledModel, Design, Effects, Fidelity, InitialCondition, ModelOptions, Moored,
+};
+use gyro_sim::solvers::Method;
+use gyro_sim::{SceneOverrides, Simulation};
+use std::f64::consts::TAU;
+
+const DESIGN: &str = include_str!("../../../designs/sperry-twin-1918.toml");
+
+/// The shipped design with its dial at `lat_deg` and parameters overridden.
+fn design(lat_deg: f64, overrides: &[(&str, f64)]) -> Result<Design, gyro_model::InputError> {
+    let mut ov: Vec<(String, toml::Value)> = vec![(
+        "parameters.latitude_dial_deg".into(),
+        toml::Value::Float(lat_deg),
+    )];
+    for (k, v) in overrides {
+        ov.push((format!("parameters.{k}"), toml::Value::Float(*v)));
+    }
+    Design::from_toml("sperry-twin-1918.toml", DESIGN, &ov)
+}
+
+/// The same, allowed outside the stable region.
+fn allowing(lat_deg: f64, overrides: &[(&str, f64)]) -> Design {
+    let mut ov: Vec<(String, toml::Value)> = vec![
+        (
+            "parameters.latitude_dial_deg".into(),
+            toml::Value::Float(lat_deg),
+        ),
+        ("allow_unstable".into(), toml::Value::Boolean(true)),
+    ];
+    for (k, v) in overrides {
+        ov.push((format!("parameters.{k}"), toml::Value::Float(*v)));
+    }
+    Design::from_toml("sperry-twin-1918.toml", DESIGN, &ov).expect("valid")
+}
+
+fn compile(d: Design, lat_deg: f64) -> CompiledModel<Moored> {
+    let mut fx = Effects::all();
+    fx.base = gyro_model::BaseEffects {
+        earth_rotation: true,
+        ..Default::default()
+    };
+    CompiledModel::compile(
+        d,
+        Moored {
+            latitude_rad: lat_deg.to_radians(),
+            heading_rad: 0.0,
+        },
+        ModelOptions {
+            fidelity: Fidelity::Full,
+            effects: fx,
+            pivot_m: [0.0; 3],
+            initial: InitialCondition {
+                from_equilibrium: true,
+                ..Default::default()
+            },
+        },
+    )
+    .expect("compiles")
+}
+
+/// The compass's slow modes (|r| below 0.01 /s: the two precession pairs), slowest first.
+fn slow_modes(m: &CompiledModel<Moored>) -> Vec<(f64, f64)> {
+    let mut modes: Vec<(f64, f64)> = m
+        .modes()
+        .into_iter()
+        .filter(|r| r.0.hypot(r.1) < 1e-2 && r.1 > 0.0)
+        .collect();
+    modes.sort_by(|a, b| a.0.hypot(a.1).total_cmp(&b.0.hypot(b.1)));
+    modes
+}
+
+fn state(m: &CompiledModel<Moored>, name: &str) -> f64 {
+    let i = m.state_names().iter().position(|n| n == name).expect(name);
+    m.equilibrium_state()[i]
+}
+
+/// A harbour scene for the twin-gyro at `lat`, `hours` long, sampled every 30 s, with extra
+/// `[compass]` lines (offsets, `allow_unstable`, `design_overrides`).
+fn harbour(lat: f64, compass: &str, hours: f64) -> String {
+    format!(
+        r#"name = "t"
+duration_s = {}
+output_rate_hz = {}
+[start]
+latitude_deg = {lat}
+[compass]
+design = "sperry-twin-1918"
+{compass}
+[simulation]
+fidelity = "gyroscopic"
+integrator = "rodas4"
+rtol = 1e-9
+atol = 1e-12
+"#,
+        hours * 3600.0,
+        1.0 / 30.0
+    )
+}
+
+/// Solves the small dense system a x = b (n × n, row-major) by Gaussian elimination with
+/// partial pivoting.
+fn solve(mut a: Vec<f64>, mut b: Vec<f64>, n: usize) -> Vec<f64> {
+    for k in 0..n {
+        let p = (k..n)
+            .max_by(|&i, &j| a[i * n + k].abs().total_cmp(&a[j * n + k].abs()))
+            .expect("rows");
+        for j in 0..n {
+            a.swap(k * n + j, p * n + j);
+        }
+        b.swap(k, p);
+        for i in k + 1..n {
+            let f = a[i * n + k] / a[k * n + k];
+            for j in k..n {
+                a[i * n + j] -= f * a[k * n + j];
+            }
+            b[i] -= f * b[k];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for k in (0..n).rev() {
+        let s: f64 = (k + 1..n).map(|j| a[k * n + j] * x[j]).sum();
+        x[k] = (b[k] - s) / a[k * n + k];
+    }
+    x
+}
+
+/// The exponents s = σ + iω of a sum of `order` damped exponentials sampled every `dt` in
+/// several channels at once (Prony's method: one linear recurrence common to every channel,
+/// by least squares; its characteristic roots z = e^{s dt}), fitted to the first differences so
+/// that a constant offset of a channel does not bias it. Returned with ω > 0, slowest first.
+fn prony(dt: f64, channels: &[Vec<f64>], order: usize) -> Vec<(f64, f64)> {
+    let mut ata = vec![0.0; order * order];
+    let mut atb = vec![0.0; order];
+    let diffs: Vec<Vec<f64>> = channels
+        .iter()
+        .map(|c| c.windows(2).map(|w| w[1] - w[0]).collect())
+        .collect();
+    for ch in &diffs {
+        let scale = ch.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        for k in order..ch.len() {
+            let row: Vec<f64> = (1..=order).map(|j| ch[k - j] / scale).collect();
+            for i in 0..order {
+                atb[i] += row[i] * ch[k] / scale;
+                for j in 0..order {
+                    ata[i * order + j] += row[i] * row[j];
+                }
+            }
+        }
+    }
+    let a = solve(ata, atb, order);
+    let mut poly: Vec<f64> = a.iter().rev().map(|c| -c).collect();
+    poly.push(1.0);
+    let mut s: Vec<(f64, f64)> = polynomial_roots(&poly)
+        .into_iter()
+        .filter(|z| z.1 > 0.0)
+        .map(|z| (z.0.hypot(z.1).ln() / dt, z.1.atan2(z.0) / dt))
+        .collect();
+    s.sort_by(|p, q| p.1.total_cmp(&q.1));
+    s
+}
+
+/// The index of a coordinate by name in the readout's `q`.
+fn coordinate(sim: &Simulation, name: &str) -> usize {
+    sim.model
+        .design
+        .coordinates
+        .iter()
+        .position(|c| c.name == name)
+        .expect(name)
+}
+
+/// Simulates a release at `lat` (ζ and θ `offsets_deg` off, the design's `overrides`), `hours`
+/// long, and returns the two slow modes Prony finds in ζ, θ, α, β (ω > 0, slowest first), and
+/// the samples of ζ about equilibrium.
+fn simulated_modes(
+    lat: f64,
+    overrides: &[(&str, f64)],
+    allow_unstable: bool,
+    hours: f64,
+    offsets_deg: (f64, f64),
+) -> (Vec<(f64, f64)>, Vec<f64>) {
+    let ov: Vec<String> = overrides
+        .iter()
+        .map(|(k, v)| format!("\"parameters.{k}\" = {v:e}"))
+        .collect();
+    let compass = format!(
+        "azimuth_offset_deg = {:e}\noffsets_deg = {{ theta = {:e} }}\nallow_unstable = {allow_unstable}\ndesign_overrides = {{ {} }}",
+        offsets_deg.0,
+        offsets_deg.1,
+        ov.join(", ")
+    );
+    let sc = scene_from(&harbour(lat, &compass, hours), &SceneOverrides::default());
+    let (sim, out, _) = run(&sc, Method::Rodas4, tol(1e-9, 1e-12));
+    let names = ["zeta", "theta", "alpha", "beta"];
+    let idx: Vec<usize> = names.iter().map(|n| coordinate(&sim, n)).collect();
+    let q_eq = sim.model.readout(0.0, &sim.model.x_equilibrium).q;
+    let channels: Vec<Vec<f64>> = idx
+        .iter()
+        .map(|&i| {
+            out.iter()
+                .map(|(t, x)| sim.model.readout(*t, x).q[i] - q_eq[i])
+                .collect()
+        })
+        .collect();
+    let dt = out[1].0 - out[0].0;
+    let tail = &channels[0][channels[0].len() * 9 / 10..];
+    println!(
+        "  ζ about equilibrium: mean of the last tenth {:.2e} rad, first sample {:.2e}",
+        tail.iter().sum::<f64>() / tail.len() as f64,
+        channels[0][0]
+    );
+    // Prony on every 4th sample (2 min, ten to the short period): on every 30-s sample the
+    // recurrence's roots crowd z = 1 and its normal equations are too ill-conditioned.
+    let every = |k: usize| -> Vec<Vec<f64>> {
+        channels
+            .iter()
+            .map(|c| c.iter().step_by(k).copied().collect())
+            .collect()
+    };
+    (prony(4.0 * dt, &every(4), 4), channels[0].clone())
+}
+
+/// Relative distance of two complex numbers.
+fn cdist(a: (f64, f64), b: (f64, f64)) -> f64 {
+    (a.0 - b.0).hypot(a.1 - b.1) / b.0.hypot(b.1)
+}
+
+/// The corrector sets N by eq. (21) so that the equilibrium has no error (ζ = 0), the spring
+/// slack (T = 0) and the boxes tilted oppositely, α = −2β = −σ/ap (eq. 20, no surcharge); with
+/// the dial left at the Equator at 35°N the compass errs.
+#[test]
+fn equilibrium_is_eqs_19_to_21() {
+    for lat in [0.0, 35.0, 60.0, -35.0] {
+        let d = design(lat, &[]).expect("valid");
+        let th = TwinGyro::from_design(&d, f64::to_radians(lat)).expect("twin");
+        let n_design = d.forces.iter().find_map(|f| match f {
+            gyro_model::Force::Spring { preload, .. } => Some(*preload),
+            _ => None,
+        });
+        let m = compile(d, lat);
+        let (zeta, alpha, beta) = (state(&m, "zeta"), state(&m, "alpha"), state(&m, "beta"));
+        let a_th = -th.sigma() / th.pendulous_moment;
+        println!(
+            "L = {lat}°: ζ {zeta:.2e}, α {alpha:.4e} vs −σ/ap {a_th:.4e}, β {beta:.4e}; N {:?} vs eq. 21 {:.4e}",
+            n_design,
+            th.zero_error_pretorque()
+        );
+        assert!(zeta.abs() < 2e-5, "L = {lat}°: ζ = {zeta:e}");
+        if lat != 0.0 {
+            assert!((alpha / a_th - 1.0).abs() < 0.02, "L = {lat}°: α");
+            assert!((beta / (-0.5 * a_th) - 1.0).abs() < 0.02, "L = {lat}°: β");
+        }
+    }
+    let m = compile(design(0.0, &[]).expect("valid"), 35.0);
+    let zeta = state(&m, "zeta");
+    println!("dial at 0°, ship at 35°N: ζ {zeta:.3e}");
+    assert!(zeta.abs() > 1e-3, "an unset corrector errs");
+}
+
+/// The linearisation's two slow pairs are the roots of the quartic (eq. 24 for c = 0, its
+/// c ≠ 0 form otherwise) within 1 %, at 0°, 35°, 60°.
+#[test]
+fn modes_are_the_quartics_roots() {
+    for lat in [0.0, 35.0, 60.0] {
+        for c in [0.1, 0.0] {
+            let d = design(lat, &[("spring_depth_m", c)]).expect("valid");
+            let th = TwinGyro::from_design(&d, f64::to_radians(lat)).expect("twin");
+            let modes = slow_modes(&compile(d, lat));
+            let roots = th.roots();
+            assert_eq!(modes.len(), 2, "L = {lat}°, c = {c}: {modes:?}");
+            for (k, r) in [roots[0], roots[2]].iter().enumerate() {
+                let r = (r.0, r.1.abs());
+                let e = cdist(modes[k], r);
+                println!(
+                    "L = {lat}°, c = {c}: mode {k} {:?} vs quartic {r:?}: {e:.2e}",
+                    modes[k]
+                );
+                assert!(e < 0.01, "L = {lat}°, c = {c}: mode {k}");
+            }
+        }
+    }
+}
+
+/// Released 1° (ζ) and ½° (θ) off at 35°N, the simulated swing holds the quartic's two periods
+/// within 1 % (c = 0.1 m and c = 0), both shorter than the West gyro's alone; with c = 0 it is
+/// undamped (the servo damps only through c: both factors below 2 % of what c = 0.1 m gives),
+/// with c the two damping factors sum to klc/IΩ within 5 %.
+#[test]
+fn simulated_periods_and_damping_are_the_quartics() {
+    let lat = 35.0;
+    for c in [0.1, 0.0] {
+        let d = design(lat, &[("spring_depth_m", c)]).expect("valid");
+        let th = TwinGyro::from_design(&d, f64::to_radians(lat)).expect("twin");
+        let [t_long, t_short] = th.periods();
+        let hours = 4.0 * t_long / 3600.0;
+        let (s, _) = simulated_modes(lat, &[("spring_depth_m", c)], false, hours, (1.0, 0.5));
+        assert_eq!(s.len(), 2, "c = {c}: {s:?}");
+        let sim_periods = [TAU / s[0].1, TAU / s[1].1];
+        println!(
+            "c = {c}: periods {:.1} s, {:.1} s vs quartic {t_long:.1} s, {t_short:.1} s (West alone {:.1} s); damping {:.3e}, {:.3e} /s vs {:?}, sum klc/IΩ {:.3e}",
+            sim_periods[0],
+            sim_periods[1],
+            th.west_alone_period(),
+            -s[0].0,
+            -s[1].0,
+            th.damping_factors(),
+            th.klc() / th.spin_momentum
+        );
+        assert!(
+            (sim_periods[0] / t_long - 1.0).abs() < 0.01,
+            "c = {c}: long period"
+        );
+        assert!(
+            (sim_periods[1] / t_short - 1.0).abs() < 0.01,
+            "c = {c}: short period"
+        );
+        assert!(sim_periods[0] < th.west_alone_period() && sim_periods[1] < th.west_alone_period());
+        let sum = -(s[0].0 + s[1].0);
+        if c == 0.0 {
+            // Undamped: both factors below 2 % of the shipped design's klc/IΩ (1.46e-4 /s).
+            let bound = 0.02 * 1.46e-4;
+            assert!(s.iter().all(|m| m.0.abs() < bound), "c = 0 damps: {s:?}");
+        } else {
+            let klc = th.klc() / th.spin_momentum;
+            assert!(
+                (sum / klc - 1.0).abs() < 0.05,
+                "c = {c}: damping sum {sum:e} vs {klc:e}"
+            );
+            let dth = th.damping_factors();
+            assert!(
+                ((dth[0] + dth[1]) / klc - 1.0).abs() < 1e-9,
+                "the quartic's own sum"
+            );
+        }
+    }
+}
+
+/// The hyperbola H, M = τ − x + √(x² + 6τx + τ²), found by simulation: with the wire 5 % stiffer
+/// than H every mode decays, 5 % softer one grows (at the Equator, where τ is largest; the
+/// softer design is refused unless the scene allows it).
+#[test]
+fn hyperbola_h_bounds_stability_by_simulation() {
+    let lat = 0.0;
+    let d = design(lat, &[]).expect("valid");
+    let th = TwinGyro::from_design(&d, 0.0).expect("twin");
+    let m_h = th.hyperbola_wire_stiffness();
+    for (factor, stable) in [(1.05, true), (0.95, false)] {
+        let ov = [("wire_stiffness_n_m_per_rad", factor * m_h)];
+        assert_eq!(design(lat, &ov).is_ok(), stable, "refused below H only");
+        let (s, _) = simulated_modes(lat, &ov, !stable, 6.0, (1.0, 0.5));
+        let growth = s.iter().map(|m| m.0).fold(f64::NEG_INFINITY, f64::max);
+        println!("M = {factor} × H ({:.4e} N·m): modes {s:?}", factor * m_h);
+        assert_eq!(
+            growth < 0.0,
+            stable,
+            "M = {factor} × H: largest growth {growth:e}"
+        );
+    }
+}
+
+/// Near the parabola P the quartic's two periods meet and a release beats: the swing's envelope
+/// falls to a small fraction of its peak and rises again (c = 0, the wire just outside P).
+#[test]
+fn strong_beats_near_parabola_p() {
+    let lat = 0.0;
+    let d = design(lat, &[("spring_depth_m", 0.0)]).expect("valid");
+    let th = TwinGyro::from_design(&d, 0.0).expect("twin");
+    let m_p = 1.02 * th.parabola_wire_stiffness();
+    let ov = [("spring_depth_m", 0.0), ("wire_stiffness_n_m_per_rad", m_p)];
+    // Below H, which bounds the damped (c ≠ 0) compass: the file's check refuses it, so the
+    // scene allows it; with c = 0 outside P every root is imaginary.
+    assert!(design(lat, &ov).is_err(), "below H");
+    let near = TwinGyro::from_design(&allowing(lat, &ov), 0.0).expect("twin");
+    let [t1, t2] = near.periods();
+    let beat = 1.0 / (1.0 / t2 - 1.0 / t1);
+    println!("near P: M {m_p:.4e}, periods {t1:.1} s and {t2:.1} s, beat {beat:.0} s");
+    assert!(t1 / t2 < 1.5, "the periods are close near P");
+    // Offsets that give both modes the same amplitude in ζ: with zero rates the displacement
+    // is Σ cᵢvᵢ, and the modes' shapes in the gyro-dominated model (22) with c = 0 have
+    // θ/ζ = (zᵢ − τ + x)/x, zᵢ the roots in u² (z₁ + z₂ = 2y + x − τ); so θ₀/ζ₀ = (2y + 3x − 3τ)/(2x).
+    let (x, y, t) = (near.x(), near.y(), near.tau());
+    let ratio = (2.0 * y + 3.0 * x - 3.0 * t) / (2.0 * x);
+    let (_, zeta) = simulated_modes(lat, &ov, true, 1.2 * beat / 3600.0, (0.5, 0.5 * ratio));
+    // The envelope: the largest |ζ| in windows of 0.6 of the short period.
+    let w = (0.6 * t2 / 30.0) as usize;
+    let env: Vec<f64> = zeta
+        .chunks(w)
+        .map(|c| c.iter().fold(0.0_f64, |m, v| m.max(v.abs())))
+        .collect();
+    let (lo, hi) = env.iter().fold((f64::INFINITY, 0.0_f64), |(lo, hi), v| {
+        (lo.min(*v), hi.max(*v))
+    });
+    println!("envelope {lo:.3e} .. {hi:.3e}");
+    assert!(lo < 0.3 * hi, "strong beats: envelope {lo:e} of {hi:e}");
+}
+
+/// A design outside the stable region is refused with the boundary it crosses, unless it (or
+/// the scene) allows it; a spring between a body and itself, or of no length, is refused.
+#[test]
+fn unstable_or_malformed_twin_designs_are_refused() {
+    let tau0 = 14.4 * 9.80665 * gyro_model::constants::EARTH_RATE_RAD_PER_S;
+    let e = design(0.0, &[("wire_stiffness_n_m_per_rad", 3.15 * tau0)]).expect_err("below H");
+    let msg = e.to_string();
+    println!("{msg}");
+    assert!(
+        msg.contains("hyperbola H") && msg.contains("allow_unstable"),
+        "{msg}"
+    );
+    assert!(e.line.is_some(), "the error names the line");
+    let allowed = Design::from_toml(
+        "sperry-twin-1918.toml",
+        DESIGN,
+        &[
+            (
+                "parameters.wire_stiffness_n_m_per_rad".into(),
+                toml::Value::Float(3.15 * tau0),
+            ),
+            ("allow_unstable".into(), toml::Value::Boolean(true)),
+        ],
+    );
+    assert!(allowed.is_ok(), "allow_unstable loads it");
+    let bad = |from: &str, to: &str| {
+        let text = DESIGN.replacen(from, to, 1);
+        Design::from_toml("bad.toml", &text, &[])
+            .expect_err(to)
+            .to_string()
+    };
+    let m = bad(
+        r#"bodies = ["west_box", "east_box"]"#,
+        r#"bodies = ["west_box", "west_box"]"#,
+    );
+    assert!(m.contains("two different bodies"), "{m}");
+    let m = bad(r#"length_m = "= 2 * spring_arm_m""#, "length_m = 0.0");
+    assert!(m.contains("length_m") && m.contains("> 0"), "{m}");
+    let m = bad(
+        r#"bodies = ["west_box", "east_box"]"#,
+        r#"bodies = ["west_box", "keel"]"#,
+    );
+    assert!(m.contains("unknown body `keel`"), "{m}");
+    // The scene's key: the same unstable design runs when the scene asks for it.
+    let ov = format!(
+        "design_overrides = {{ \"parameters.wire_stiffness_n_m_per_rad\" = {:e} }}",
+        3.15 * tau0
+    );
+    let refused = gyro_sim::Scene::from_toml(
+        "s.toml",
+        &harbour(0.0, &ov, 0.1),
+        None,
+        &SceneOverrides::default(),
+    );
+    assert!(refused.is_err());
+    let _ = scene_from(
+        &harbour(0.0, &format!("{ov}\nallow_unstable = true"), 0.1),
+        &SceneOverrides::default(),
+    );
+}
+
+/// The largest growth rate among the compass's slow modes (|r| < 0.01 /s, real roots included).
+fn slow_growth(m: &CompiledModel<Moored>) -> f64 {
+    m.modes()
+        .into_iter()
+        .filter(|r| r.0.hypot(r.1) < 1e-2)
+        .map(|r| r.0)
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// Without c (undamped, every root imaginary in the stable region) the line D, y + 2x − τ = 0,
+/// and the parabola P, (2y + x − τ)² = 8τ(y + 2x − τ), bound the region: 5 % of M on their
+/// stable side the linearisation's slow modes stay on the imaginary axis (|Re| < 1e-6 /s), 5 %
+/// on the other side one grows (> 1e-5 /s): a real root across D, a complex pair in u² inside P.
+/// (The line Δ, 2y + x − τ = 0, lies inside P wherever D holds: it bounds nothing on its own.)
+#[test]
+fn line_d_and_parabola_p_bound_the_undamped_compass_by_its_modes() {
+    let lat = 0.0;
+    let base = allowing(lat, &[("spring_depth_m", 0.0)]);
+    let th = TwinGyro::from_design(&base, 0.0).expect("twin");
+    let (l, t) = (th.half_spacing, th.tau());
+    // D at a weak spring, x = 0.1τ: y_D = τ − 2x; P at the design's x.
+    let k_weak = 0.1 * t / (l * l);
+    let cases = [
+        ("D", k_weak, t - 2.0 * 0.1 * t),
+        ("P", th.spring_rate, th.parabola_wire_stiffness()),
+    ];
+    for (name, k, y_b) in cases {
+        for (factor, stable) in [(1.05, true), (0.95, false)] {
+            let ov = [
+                ("spring_depth_m", 0.0),
+                ("spring_rate_n_per_m", k),
+                ("wire_stiffness_n_m_per_rad", factor * y_b),
+            ];
+            let growth = slow_growth(&compile(allowing(lat, &ov), lat));
+            println!("{name}: M = {factor} × {y_b:.4e} N·m: largest slow growth {growth:.3e} /s");
+            if stable {
+                assert!(growth.abs() < 1e-6, "{name}, {factor}: {growth:e}");
+            } else {
+                assert!(growth > 1e-5, "{name}, {factor}: {growth:e}");
+            }
+        }
+    }
+}
