@@ -444,21 +444,7 @@ pub fn evaluate<T: Real, const N: usize>(
         let phi = fr.angle.eval(&q[..n]);
         let (s, c) = phi.sin_cos();
         st.through_hinge(fr, n, moving, false, (s, c), (s, c));
-        // The hinge's own columns: its axis (and lever) times ∂φ/∂qᵢ.
-        let mut grad = [zero; N];
-        fr.angle.add_gradient(&q[..n], &mut grad[..n]);
-        let axp = st.hinge_lever(fr);
-        for i in 0..n {
-            if fr.reads & (1 << i) == 0 || grad[i] == zero {
-                continue;
-            }
-            st.jw[i].0[fr.axis] += grad[i];
-            st.jw_on |= 1 << i;
-            if !fr.at_pivot {
-                st.jm[i] = st.jm[i].add(&axp.scale(grad[i]));
-                st.jm_on |= 1 << i;
-            }
-        }
+        st.add_hinge_columns(fr, &q[..n]);
         if fr.save {
             saved.push((fi, st));
         }

@@ -33,6 +33,30 @@ pub(super) struct Carried<T: Real, const N: usize, const L: usize> {
     pub(super) jm_on: u32,
 }
 
+impl<T: Real, const N: usize> Carried<T, N, N> {
+    /// The hinge's own Jacobian columns (`evaluate`'s, with a lane per coordinate): its axis,
+    /// and its lever off the pivot, times ∂φ/∂qᵢ for the n coordinates `q`.
+    #[inline(always)]
+    pub(super) fn add_hinge_columns(&mut self, fr: &Frame, q: &[Jet<T, N>]) {
+        let zero = Jet::<T, N>::zero();
+        let n = q.len();
+        let mut grad = [zero; N];
+        fr.angle.add_gradient(q, &mut grad[..n]);
+        let axp = self.hinge_lever(fr);
+        for i in 0..n {
+            if fr.reads & (1 << i) == 0 || grad[i] == zero {
+                continue;
+            }
+            self.jw[i].0[fr.axis] += grad[i];
+            self.jw_on |= 1 << i;
+            if !fr.at_pivot {
+                self.jm[i] = self.jm[i].add(&axp.scale(grad[i]));
+                self.jm_on |= 1 << i;
+            }
+        }
+    }
+}
+
 impl<T: Real, const N: usize, const L: usize> Carried<T, N, L> {
     /// At the base: its rate and gravity in its own axes, nothing else yet; and whether the
     /// base moves (its rate changes in time).
