@@ -290,7 +290,7 @@ fn same_table_on_ray(
     let out = succeed(
         cluster
             .gyrolab()
-            .args(cluster.sweep_args(&study, &on_ray))
+            .args(cluster.sweep_args(study, &on_ray))
             .arg("--json"),
     );
     let s: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
@@ -301,7 +301,7 @@ fn same_table_on_ray(
     );
     let got = table(&on_ray);
     assert!(
-        got.equals_missing(&reference),
+        got.equals_missing(reference),
         "ray:\n{got}\nlocal:\n{reference}"
     );
     for i in [0, 3] {
@@ -309,7 +309,7 @@ fn same_table_on_ray(
     }
     assert!(partial_files(&on_ray).is_empty());
     // pandas (through pyarrow) reads the table with its types.
-    let read = Command::new(&python)
+    let read = Command::new(python)
         .arg("-c")
         .arg(
             "import sys, pandas, pyarrow.parquet as pq\n\
@@ -341,7 +341,7 @@ fn worker_killed_mid_task(cluster: &Cluster, dir: &Path, slow: &str) {
     let needle = killed.display().to_string();
     let sweep = cluster
         .gyrolab()
-        .args(cluster.sweep_args(&slow, &killed))
+        .args(cluster.sweep_args(slow, &killed))
         .arg("--json")
         .stdout(Stdio::piped())
         .spawn()
@@ -410,7 +410,7 @@ fn driver_killed_and_resumed(cluster: &Cluster, dir: &Path, study: &str, referen
     let resumed = dir.join("resumed");
     let sweep = cluster
         .gyrolab()
-        .args(cluster.sweep_args(&study, &resumed))
+        .args(cluster.sweep_args(study, &resumed))
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -452,7 +452,7 @@ fn driver_killed_and_resumed(cluster: &Cluster, dir: &Path, study: &str, referen
     let out = succeed(
         cluster
             .gyrolab()
-            .args(cluster.sweep_args(&study, &resumed))
+            .args(cluster.sweep_args(study, &resumed))
             .arg("--json"),
     );
     let s: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
@@ -464,7 +464,7 @@ fn driver_killed_and_resumed(cluster: &Cluster, dir: &Path, study: &str, referen
     );
     let got = table(&resumed);
     assert!(
-        got.equals_missing(&reference),
+        got.equals_missing(reference),
         "resumed:\n{got}\nlocal:\n{reference}"
     );
     assert!(partial_files(&resumed).is_empty());
