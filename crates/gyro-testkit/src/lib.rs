@@ -118,9 +118,19 @@ fn make_venv(cache: &Path, name: &str, requirements: &[&str]) -> Result<PathBuf,
 fn make_venv_locked(venv: &Path, requirements: &[&str]) -> Result<PathBuf, String> {
     let python = venv.join("bin").join("python");
     let marker = venv.join(".requirements");
-    let wanted = requirements.join("\n");
-    if python.exists() && fs::read_to_string(&marker).is_ok_and(|m| m == wanted) {
+    // The marker names the venv's own folder too: a venv moved with its target directory keeps
+    // console scripts (`rerun`) whose first line runs the old folder's python, so it is made anew.
+    let wanted = format!("{}\n{}", venv.display(), requirements.join("\n"));
+    let found = fs::read_to_string(&marker).ok();
+    if python.exists() && found.as_deref() == Some(wanted.as_str()) {
         return Ok(python);
+    }
+    let made_here = found
+        .as_deref()
+        .and_then(|m| m.lines().next())
+        .is_some_and(|first| Path::new(first) == venv);
+    if venv.exists() && !made_here {
+        fs::remove_dir_all(venv).map_err(|e| format!("cannot remove {}: {e}", venv.display()))?;
     }
     if !python.exists() {
         let out = Command::new("python3")
