@@ -21,33 +21,7 @@ fn theory(d: &Design, lat_deg: f64) -> Slough {
 
 /// A harbour scene for the Slough at `lat`, `hours` long, with extra `[compass]` lines.
 fn harbour(lat: f64, compass: &str, hours: f64) -> String {
-    format!(
-        r#"name = "t"
-duration_s = {}
-output_rate_hz = 0.1
-[start]
-latitude_deg = {lat}
-[compass]
-design = "slough"
-{compass}
-[simulation]
-fidelity = "gyroscopic"
-integrator = "rodas4"
-rtol = 1e-9
-atol = 1e-12
-"#,
-        hours * 3600.0
-    )
-}
-
-/// The index of a coordinate by name in the readout's `q`.
-fn coordinate(sim: &Simulation, name: &str) -> usize {
-    sim.model
-        .design
-        .coordinates
-        .iter()
-        .position(|c| c.name == name)
-        .expect(name)
+    support::harbour_scene("slough", lat, compass, hours, 0.1)
 }
 
 /// Released 2° off at 0°, 35° and 60°: the swing's period is that of the compass roots of
@@ -67,7 +41,7 @@ fn harbour_swing_has_the_period_and_decay_of_eqs_20_to_23() {
         let (sim, out, _) = run(&sc, Method::Rodas4, tol(1e-9, 1e-12));
         let xe = &sim.model.x_equilibrium;
         let r0 = sim.model.readout(0.0, xe).reading_error_rad;
-        let iz = coordinate(&sim, "zeta");
+        let iz = support::coordinate(&sim, "zeta");
         let t: Vec<f64> = out.iter().map(|v| v.0).collect();
         let (y, yd): (Vec<f64>, Vec<f64>) = out
             .iter()
@@ -114,7 +88,7 @@ fn settled_reading_and_mercury_level_are_eq_18() {
         let (sim, out, _) = run(&sc, Method::Rodas4, tol(1e-9, 1e-12));
         let (t, x) = out.last().expect("samples");
         let r = sim.model.readout(*t, x);
-        let u = r.q[coordinate(&sim, "u")];
+        let u = r.q[support::coordinate(&sim, "u")];
         println!(
             "L = {lat}°: reading {:.4}° vs −ρ tan L {:.4}°; u {:.3e} m vs hη {:.3e} m",
             r.reading_error_rad.to_degrees(),

@@ -20,23 +20,7 @@ fn theory(d: &Design, lat_deg: f64) -> Sperry1911 {
 
 /// A harbour scene for the Sperry at `lat`, `hours` long, with extra `[compass]` lines.
 fn harbour(lat: f64, compass: &str, hours: f64) -> String {
-    format!(
-        r#"name = "t"
-duration_s = {}
-output_rate_hz = 0.1
-[start]
-latitude_deg = {lat}
-[compass]
-design = "sperry-1911"
-{compass}
-[simulation]
-fidelity = "gyroscopic"
-integrator = "rodas4"
-rtol = 1e-9
-atol = 1e-12
-"#,
-        hours * 3600.0
-    )
+    support::harbour_scene("sperry-1911", lat, compass, hours, 0.1)
 }
 
 /// (t, reading error − its equilibrium, its rate, θ − its equilibrium) from the readouts (the

@@ -11,37 +11,40 @@ use gyro_model::theory::{TwinGyro, polynomial_roots};
 use gyro_model::{
     CompiledModel, Design, Effects, Fidelity, InitialCondition, ModelOptions, Moored,
 };
+use gyro_sim::SceneOverrides;
 use gyro_sim::solvers::Method;
-use gyro_sim::{SceneOverrides, Simulation};
 use std::f64::consts::TAU;
 
 const DESIGN: &str = include_str!("../../../designs/sperry-twin-1918.toml");
 
-/// The shipped design with its dial at `lat_deg` and parameters overridden.
-fn design(lat_deg: f64, overrides: &[(&str, f64)]) -> Result<Design, gyro_model::InputError> {
+/// The shipped design with its dial at `lat_deg`, parameters overridden, and allowed outside
+/// the stable region or not.
+fn load(
+    lat_deg: f64,
+    overrides: &[(&str, f64)],
+    allow_unstable: bool,
+) -> Result<Design, gyro_model::InputError> {
     let mut ov: Vec<(String, toml::Value)> = vec![(
         "parameters.latitude_dial_deg".into(),
         toml::Value::Float(lat_deg),
     )];
+    if allow_unstable {
+        ov.push(("allow_unstable".into(), toml::Value::Boolean(true)));
+    }
     for (k, v) in overrides {
         ov.push((format!("parameters.{k}"), toml::Value::Float(*v)));
     }
     Design::from_toml("sperry-twin-1918.toml", DESIGN, &ov)
 }
 
+/// The shipped design with its dial at `lat_deg` and parameters overridden.
+fn design(lat_deg: f64, overrides: &[(&str, f64)]) -> Result<Design, gyro_model::InputError> {
+    load(lat_deg, overrides, false)
+}
+
 /// The same, allowed outside the stable region.
 fn allowing(lat_deg: f64, overrides: &[(&str, f64)]) -> Design {
-    let mut ov: Vec<(String, toml::Value)> = vec![
-        (
-            "parameters.latitude_dial_deg".into(),
-            toml::Value::Float(lat_deg),
-        ),
-        ("allow_unstable".into(), toml::Value::Boolean(true)),
-    ];
-    for (k, v) in overrides {
-        ov.push((format!("parameters.{k}"), toml::Value::Float(*v)));
-    }
-    Design::from_toml("sperry-twin-1918.toml", DESIGN, &ov).expect("valid")
+    load(lat_deg, overrides, true).expect("valid")
 }
 
 fn compile(d: Design, lat_deg: f64) -> CompiledModel<Moored> {
@@ -88,24 +91,7 @@ fn state(m: &CompiledModel<Moored>, name: &str) -> f64 {
 /// A harbour scene for the twin-gyro at `lat`, `hours` long, sampled every 30 s, with extra
 /// `[compass]` lines (offsets, `allow_unstable`, `design_overrides`).
 fn harbour(lat: f64, compass: &str, hours: f64) -> String {
-    format!(
-        r#"name = "t"
-duration_s = {}
-output_rate_hz = {}
-[start]
-latitude_deg = {lat}
-[compass]
-design = "sperry-twin-1918"
-{compass}
-[simulation]
-fidelity = "gyroscopic"
-integrator = "rodas4"
-rtol = 1e-9
-atol = 1e-12
-"#,
-        hours * 3600.0,
-        1.0 / 30.0
-    )
+    harbour_scene("sperry-twin-1918", lat, compass, hours, 1.0 / 30.0)
 }
 
 /// Solves the small dense system a x = b (n × n, row-major) by Gaussian elimination with
@@ -168,16 +154,6 @@ fn prony(dt: f64, channels: &[Vec<f64>], order: usize) -> Vec<(f64, f64)> {
         .collect();
     s.sort_by(|p, q| p.1.total_cmp(&q.1));
     s
-}
-
-/// The index of a coordinate by name in the readout's `q`.
-fn coordinate(sim: &Simulation, name: &str) -> usize {
-    sim.model
-        .design
-        .coordinates
-        .iter()
-        .position(|c| c.name == name)
-        .expect(name)
 }
 
 /// Simulates a release at `lat` (ζ and θ `offsets_deg` off, the design's `overrides`), `hours`

@@ -39,6 +39,33 @@ pub fn run(
     (sim, out, stats)
 }
 
+/// A harbour scene of `design` at `lat`, `hours` long, sampled at `rate_hz`, with extra
+/// `[compass]` lines; gyroscopic, RODAS4 at rtol 1e-9 / atol 1e-12.
+pub fn harbour_scene(design: &str, lat: f64, compass: &str, hours: f64, rate_hz: f64) -> String {
+    format!(
+        r#"name = "t"
+duration_s = {}
+output_rate_hz = {rate_hz}
+[start]
+latitude_deg = {lat}
+[compass]
+design = "{design}"
+{compass}
+[simulation]
+fidelity = "gyroscopic"
+integrator = "rodas4"
+rtol = 1e-9
+atol = 1e-12
+"#,
+        hours * 3600.0
+    )
+}
+
+/// The index of a coordinate by name in the readout's `q`.
+pub fn coordinate(sim: &Simulation, name: &str) -> usize {
+    sim.model.design.coordinate_index(name).expect(name)
+}
+
 pub fn tol(rtol: f64, atol: f64) -> Tolerances {
     Tolerances {
         rtol,
