@@ -295,7 +295,8 @@ impl BodyAxesChain {
             frames,
             links: LinkWalk::of(d, &forces),
             forces,
-            pots: (!d.pots.is_empty()).then(|| Chain::from_design(d, |_| false)),
+            pots: (!d.pots.is_empty() || !d.tanks.is_empty())
+                .then(|| Chain::from_design(d, |_| false)),
         }
     }
 }

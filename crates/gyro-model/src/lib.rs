@@ -34,7 +34,10 @@ mod model;
 mod reference_engine;
 pub mod theory;
 
-pub use design::{CoordinateRole, CoordinateUnit, Design, Force, Pots, Root, Shape, SpinMode};
+pub use design::{
+    Compartment, CoordinateRole, CoordinateUnit, Design, Force, Pots, Root, Shape, SpinMode, Tank,
+    Valves,
+};
 pub use dual::{Jet, Real};
 pub use earth::{BaseEffects, Moored, ShipKinematics, ShipMotion};
 pub use error::InputError;

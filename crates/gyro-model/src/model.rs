@@ -1292,10 +1292,16 @@ impl<M: ShipMotion> CompiledModel<M> {
         residual(&q, &mut c);
         let scale = c.iter().map(|x| x.abs()).fold(0.0, f64::max).max(1e-300);
         let mut norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
+        // The stiffest restoring term, N·m/rad: a residual at its round-off (1e-12 rad of
+        // displacement) is converged however small the start's residual was.
+        let mut stiffness: f64 = 0.0;
         for _ in 0..60 {
             // Jacobian of the static torques by dual numbers.
             let mut jac = vec![0.0; ni * ni];
             self.static_stiffness(&q, &mut jac);
+            stiffness = (0..ni)
+                .map(|i| jac[i * ni + i].abs())
+                .fold(stiffness, f64::max);
             let mut step: Vec<f64> = c.iter().map(|x| -x).collect();
             if !solve_in_place(&mut jac, &mut step, ni) {
                 return Err(ModelError::NoEquilibrium("the static stiffness matrix is singular (is every coordinate restrained by gravity, a spring or the Earth's rotation?)".into()));
@@ -1317,7 +1323,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                 return Ok(q);
             }
         }
-        if norm <= 1e-9 * scale {
+        if norm <= 1e-9 * scale || norm <= 1e-12 * stiffness {
             Ok(q)
         } else {
             Err(ModelError::NoEquilibrium(format!(
@@ -1339,6 +1345,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             .fold(0.0, f64::max);
         let mut precessional = vec![false; ni];
         if big == 0.0 {
+            self.first_order_levels(&mut precessional);
             return precessional;
         }
         // The precessional block must be solvable: its skew matrix nonsingular, so its
@@ -1369,7 +1376,20 @@ impl<M: ShipMotion> CompiledModel<M> {
                 precessional[j] = true;
             }
         }
+        self.first_order_levels(&mut precessional);
         precessional
+    }
+
+    /// A tank's levels lose their flow inertia with the gyroscopic terms: their equations are
+    /// Beghin's first-order ones (37), D ḣ = −∂V/∂h, solvable since D is positive definite.
+    fn first_order_levels(&self, first_order: &mut [bool]) {
+        for t in &self.design.tanks {
+            for &l in &t.levels {
+                if let Some(col) = self.independent.iter().position(|&i| i == l) {
+                    first_order[col] = true;
+                }
+            }
+        }
     }
 
     /// Sets the momentum of free rotors from a state: relative spin plus the carrier's rate.

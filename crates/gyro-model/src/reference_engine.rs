@@ -24,7 +24,7 @@
 //! This world-axes form is the reference: the model evaluates the same equations in body axes
 //! (`body_axes`), about 4 times cheaper, and the tests hold the two together to round-off.
 
-use crate::design::{Body, Design, Force, Hinge, Pots, Root};
+use crate::design::{Body, Design, Force, Hinge, Pots, Root, Tank};
 use crate::dual::{Jet, M3, Real, V3};
 use crate::force_elements::{self, RateTerms, SpringsInto};
 
@@ -36,6 +36,8 @@ pub struct Chain {
     pub forces: Vec<Force>,
     /// Communicating pots (their carriers are bodies of the chain).
     pub pots: Vec<Pots>,
+    /// Liquid tanks (their carriers are bodies of the chain).
+    pub tanks: Vec<Tank>,
     pub ship_root: bool,
 }
 
@@ -86,6 +88,7 @@ impl Chain {
                 .cloned()
                 .collect(),
             pots: d.pots.clone(),
+            tanks: d.tanks.clone(),
             ship_root: d.root == Root::Ship,
         }
     }
@@ -232,6 +235,17 @@ pub fn evaluate<T: Real, const N: usize>(
             m: &mut *out.m,
         };
         pots::add(pots, &kin[pots.body], &q, n, inp, &w0, terms);
+    }
+    for tank in &chain.tanks {
+        let terms = pots::Terms {
+            p2: &mut p2,
+            b: &mut b,
+            t2: &mut t2,
+            t0: &mut t0,
+            v: &mut v,
+            m: &mut *out.m,
+        };
+        tank::add(tank, &kin[tank.body], &q, n, inp, &w0, terms);
     }
 
     // Generalised forces.
@@ -418,11 +432,13 @@ macro_rules! dispatch_n {
 }
 
 mod pots;
+mod tank;
 
-/// The communicating pots' share of M, K, c and the energies, added into `out` (for the
-/// body-axes engine, which walks the rest of the chain its own way). Nothing without pots.
+/// The liquids' (communicating pots', tanks') share of M, K, c and the energies, added into
+/// `out` (for the body-axes engine, which walks the rest of the chain its own way). Nothing
+/// without liquids.
 pub fn evaluate_pots_any<T: Real>(chain: &Chain, inp: &EvalInput<T>, out: &mut EvalOutput<T>) {
-    if !chain.pots.is_empty() {
+    if !chain.pots.is_empty() || !chain.tanks.is_empty() {
         dispatch_n!(chain.n, evaluate_pots, chain, inp, out)
     }
 }

@@ -610,6 +610,288 @@ impl TwinGyro {
     }
 }
 
+/// The Anschütz three-gyro 1912 (Beghin ch. VI): three gyros of momentum IΩ on a float of
+/// righting moment Πf, the lateral linkage's rate P, the South gyro's springs p, and the oil
+/// tank of §67 (two compartment kinds, S₁ at w₁ and S₂ at w₂, joined in a ring by tubes of
+/// resistance b). Inertias are the float's whole (gyros included) about its axes through O.
+#[derive(Clone, Debug)]
+pub struct ThreeGyro {
+    /// IΩ of each gyro, N·m·s.
+    pub spin_momentum: f64,
+    /// Πf of the float with its gyros and oil at rest (free surfaces not counted), N·m.
+    pub righting_moment: f64,
+    /// ϖE, ϖF: the oil's free surfaces' moments about the East–West and North–South axes, N·m.
+    pub free_surface_e: f64,
+    pub free_surface_f: f64,
+    /// P, the linkage springs' rate, and p, the South gyro's springs', N·m/rad.
+    pub linkage_rate: f64,
+    pub south_spring_rate: f64,
+    /// 𝒞, ℬ, 𝒜: the whole float's moments about its vertical, East–West and North–South axes
+    /// through O; c = C₁ + C₂, one gyro's box and rotor about its own vertical, kg·m².
+    pub inertia_c: f64,
+    pub inertia_b: f64,
+    pub inertia_a: f64,
+    pub box_inertia: f64,
+    /// ϖ = ρg, N/m³; a, m; S₁, S₂, m²; w₁, w₂, rad; b, s/m² (the tank; zero without one).
+    pub oil_weight_density: f64,
+    pub tank_radius: f64,
+    pub areas: [f64; 2],
+    pub azimuths: [f64; 2],
+    pub flow_resistance: f64,
+    pub latitude_rad: f64,
+}
+
+impl ThreeGyro {
+    /// The constants of a design built like `designs/anschutz-three-gyro-1912.toml`, read from
+    /// its bodies, forces and tank (not from the parameters that chose them): the rotor of
+    /// `south_rotor`, the bodies from `float` down, the springs `linkage_springs` and
+    /// `south_springs`, the first tank's first two compartments and first tube.
+    pub fn from_design(d: &crate::Design, latitude_rad: f64) -> Option<ThreeGyro> {
+        let g = STANDARD_GRAVITY_M_PER_S2;
+        let float = d.body_index("float")?;
+        let rotor = d.bodies[d.body_index("south_rotor")?].rotor.as_ref()?;
+        // Each body's rotation and origin in the float's axes at rest (hinges at zero).
+        let n = d.bodies.len();
+        let mut pose: Vec<Option<([[f64; 3]; 3], [f64; 3])>> = vec![None; n];
+        pose[float] = Some((identity3(), [0.0; 3]));
+        for i in float + 1..n {
+            let b = &d.bodies[i];
+            if let Some((rp, op)) = b.parent.and_then(|p| pose[p]) {
+                let r = mat3(&rp, &b.joint_rotation);
+                let o = add3(&op, &mat3_v(&rp, &b.joint_origin_m));
+                pose[i] = Some((r, o));
+            }
+        }
+        let (mut inertia, mut moment) = ([[0.0; 3]; 3], 0.0);
+        for (i, p) in pose.iter().enumerate() {
+            let Some((r, o)) = p else { continue };
+            let b = &d.bodies[i];
+            let c = add3(o, &mat3_v(r, &b.cg_m));
+            moment -= g * b.mass_kg * c[2];
+            let rot = mat3(&mat3(r, &b.inertia_kg_m2), &transpose3(r));
+            let c2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+            for (j, row) in inertia.iter_mut().enumerate() {
+                for (k, x) in row.iter_mut().enumerate() {
+                    *x += rot[j][k] + b.mass_kg * (if j == k { c2 } else { 0.0 } - c[j] * c[k]);
+                }
+            }
+        }
+        let box_inertia = d.bodies[d.body_index("south_box")?].inertia_kg_m2[2][2]
+            + d.bodies[d.body_index("south_rotor")?].inertia_kg_m2[2][2];
+        let spring = |name: &str| {
+            d.forces.iter().find_map(|f| match f {
+                crate::Force::Spring {
+                    name: n, stiffness, ..
+                } if n == name => Some(*stiffness),
+                _ => None,
+            })
+        };
+        let mut th = ThreeGyro {
+            spin_momentum: rotor.polar_inertia_kg_m2 * rotor.spin_rad_per_s,
+            righting_moment: moment,
+            free_surface_e: 0.0,
+            free_surface_f: 0.0,
+            linkage_rate: spring("linkage_springs")?,
+            south_spring_rate: spring("south_springs")?,
+            inertia_c: inertia[2][2],
+            inertia_b: inertia[1][1],
+            inertia_a: inertia[0][0],
+            box_inertia,
+            oil_weight_density: 0.0,
+            tank_radius: 0.0,
+            areas: [0.0; 2],
+            azimuths: [0.0; 2],
+            flow_resistance: 0.0,
+            latitude_rad,
+        };
+        if let Some(t) = d.tanks.first() {
+            let w = t.density_kg_per_m3 * g;
+            let z = t.floor_height_m + 0.5 * t.rest_depth_m;
+            let (c0, c1) = (&t.compartments[0], &t.compartments[1]);
+            th.righting_moment -=
+                w * t.rest_depth_m * z * t.compartments.iter().map(|c| c.area_m2).sum::<f64>();
+            th.free_surface_e = w * t
+                .compartments
+                .iter()
+                .map(|c| c.free_surface_m4[1])
+                .sum::<f64>();
+            th.free_surface_f = w * t
+                .compartments
+                .iter()
+                .map(|c| c.free_surface_m4[0])
+                .sum::<f64>();
+            th.oil_weight_density = w;
+            th.tank_radius = c0.centroid_m[0].hypot(c0.centroid_m[1]);
+            th.areas = [c0.area_m2, c1.area_m2];
+            th.azimuths = [
+                c0.centroid_m[1].atan2(c0.centroid_m[0]),
+                c1.centroid_m[1].atan2(c1.centroid_m[0]),
+            ];
+            th.flow_resistance = t.tubes.first().map_or(0.0, |tb| tb.2);
+        }
+        Some(th)
+    }
+    /// τ = IΩε cos L of one gyro, N·m.
+    pub fn tau(&self) -> f64 {
+        self.spin_momentum * EARTH_RATE_RAD_PER_S * self.latitude_rad.cos()
+    }
+    /// 𝓗 = IΩ(1 + √3), N·m·s (eq. 1 at β = 0).
+    pub fn total_momentum(&self) -> f64 {
+        self.spin_momentum * (1.0 + 3f64.sqrt())
+    }
+    /// Πf − ϖE, N·m.
+    pub fn effective_righting_moment(&self) -> f64 {
+        self.righting_moment - self.free_surface_e
+    }
+    /// Eq. (5): T = 2π√(IΩ(1 + √3)/((Πf − ϖE) ε cos L)), s.
+    pub fn azimuth_period_s(&self) -> f64 {
+        TAU * (self.total_momentum()
+            / (self.effective_righting_moment() * EARTH_RATE_RAD_PER_S * self.latitude_rad.cos()))
+        .sqrt()
+    }
+    /// Eq. (10) with (54)'s P + τ√3: T₁ = 2πIΩ/√((P + τ√3)(Πf − ϖF)), s.
+    pub fn lateral_period_s(&self) -> f64 {
+        TAU * self.spin_momentum
+            / ((self.linkage_rate + self.tau() * 3f64.sqrt())
+                * (self.righting_moment - self.free_surface_f))
+                .sqrt()
+    }
+    /// The five root families of the precise undamped model (10)–(12), as angular frequencies
+    /// |r| (1/s): the South springs' mode r₁ ≈ √(p(1 + √3)²/(𝒞 + 2c)), the azimuth r₂ =
+    /// √(τΠf/(I²Ω²(1 + √3))), the nutation r₃ = IΩ√((𝒞 + 2c)/((𝒞 − c)ℬc)), the lateral r₄ =
+    /// √(PΠf)/IΩ, the lateral nutation r₅ = IΩ/√(2c𝒜).
+    pub fn root_families(&self) -> [f64; 5] {
+        let (h, s3) = (self.spin_momentum, 1.0 + 3f64.sqrt());
+        let (cc, bb, aa, c) = (
+            self.inertia_c,
+            self.inertia_b,
+            self.inertia_a,
+            self.box_inertia,
+        );
+        let pf = self.effective_righting_moment();
+        [
+            (self.south_spring_rate * s3 * s3 / (cc + 2.0 * c)).sqrt(),
+            (self.tau() * pf / (h * h * s3)).sqrt(),
+            h * ((cc + 2.0 * c) / ((cc - c) * bb * c)).sqrt(),
+            ((self.linkage_rate + self.tau() * 3f64.sqrt())
+                * (self.righting_moment - self.free_surface_f))
+                .sqrt()
+                / h,
+            h / (2.0 * c * aa).sqrt(),
+        ]
+    }
+    fn cos2(&self) -> (f64, f64) {
+        (self.azimuths[0].cos(), self.azimuths[1].cos())
+    }
+    /// k of eq. (59), 1/m: (Πf − ϖE)k = 4ϖa²(cos²w₁ − 2cos w₁cos w₂ + 3cos²w₂).
+    pub fn tank_k(&self) -> f64 {
+        let (c1, c2) = self.cos2();
+        4.0 * self.oil_weight_density
+            * self.tank_radius.powi(2)
+            * (c1 * c1 - 2.0 * c1 * c2 + 3.0 * c2 * c2)
+            / self.effective_righting_moment()
+    }
+    /// The left side of (62) over its right, 4ϖa²(S₁cos²w₁ + S₂cos²w₂)/(Πf − ϖE): the azimuth
+    /// motion is unstable above 1 (kal above ≈ 0.31 for the tank of table (61)).
+    pub fn free_surface_ratio(&self) -> f64 {
+        let (c1, c2) = self.cos2();
+        4.0 * self.oil_weight_density
+            * self.tank_radius.powi(2)
+            * (self.areas[0] * c1 * c1 + self.areas[1] * c2 * c2)
+            / self.effective_righting_moment()
+    }
+    /// m₁, m₂ (roots of (57), the tank's own antisymmetric modes per unit flow y = 1/b) and m₃
+    /// of (60), 1/m².
+    pub fn tank_m(&self) -> [f64; 3] {
+        let [s1, s2] = self.areas;
+        let (c1, c2) = self.cos2();
+        let disc = ((3.0 * s1 + s2).powi(2) - 8.0 * s1 * s2).sqrt();
+        let m1 = (-(3.0 * s1 + s2) + disc) / (2.0 * s1 * s2);
+        let m2 = (-(3.0 * s1 + s2) - disc) / (2.0 * s1 * s2);
+        let shape = c1 * c1 - 2.0 * c1 * c2 + 3.0 * c2 * c2;
+        let m3 = -2.0 * (s1 * c1 * c1 + s2 * c2 * c2) / (s1 * s2 * shape);
+        [m1, m2, m3]
+    }
+    /// K of (56), s²: Kτ(Πf − ϖE) = I²Ω²(1 + √3); 2π√K is the undamped azimuth period.
+    pub fn tank_big_k(&self) -> f64 {
+        self.spin_momentum.powi(2) * (1.0 + 3f64.sqrt())
+            / (self.tau() * self.effective_righting_moment())
+    }
+    /// The four roots of (55), (r − μy)(r − μ′y) + Kr²(r − m₁y)(r − m₂y) = 0, for the flow
+    /// y = 1/b (m²/s), as (re, im) in 1/s, μ and μ′ the roots of (58).
+    pub fn tank_roots(&self, y: f64) -> Vec<(f64, f64)> {
+        let [m1, m2, m3] = self.tank_m();
+        let k = self.tank_k();
+        // μ² − (m₁ + m₂ + k)μ + m₁m₂ + k m₃ = 0: only the sum and product enter.
+        let (mu_sum, mu_prod) = (m1 + m2 + k, m1 * m2 + k * m3);
+        let kk = self.tank_big_k();
+        polynomial_roots(&[
+            mu_prod * y * y,
+            -mu_sum * y,
+            1.0 + kk * m1 * m2 * y * y,
+            -kk * (m1 + m2) * y,
+            kk,
+        ])
+    }
+    /// The oscillating pair of (55) at flow y: its log-decrement 2π|re|/|im| and its period
+    /// 2π/|im| (s); `None` if all four roots are real.
+    pub fn tank_oscillation(&self, y: f64) -> Option<(f64, f64)> {
+        // The azimuth oscillation: the complex pair of the largest frequency.
+        let r = self
+            .tank_roots(y)
+            .into_iter()
+            .filter(|r| r.1.abs() > 1e-9 * r.0.hypot(r.1))
+            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))?;
+        Some((TAU * -r.0 / r.1.abs(), TAU / r.1.abs()))
+    }
+    /// The flow y = 1/b (m²/s) of the largest log-decrement (§68), by golden-section search on
+    /// ln y over the range where the pair oscillates.
+    pub fn optimal_flow(&self) -> f64 {
+        let dec = |ly: f64| self.tank_oscillation(ly.exp()).map_or(-1.0, |o| o.0);
+        // A coarse scan brackets the maximum, golden sections refine it.
+        let (lo, hi) = (-25.0f64, 0.0f64);
+        let steps = 700;
+        let best = (0..=steps)
+            .map(|i| lo + (hi - lo) * i as f64 / steps as f64)
+            .max_by(|a, b| dec(*a).total_cmp(&dec(*b)))
+            .unwrap_or(0.0);
+        let h = (hi - lo) / steps as f64;
+        let (mut a, mut b) = (best - h, best + h);
+        let gr = 0.5 * (5f64.sqrt() - 1.0);
+        for _ in 0..80 {
+            let (c, d) = (b - gr * (b - a), a + gr * (b - a));
+            if dec(c) > dec(d) {
+                b = d;
+            } else {
+                a = c;
+            }
+        }
+        (0.5 * (a + b)).exp()
+    }
+}
+
+fn identity3() -> [[f64; 3]; 3] {
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+}
+fn mat3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let mut c = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    c
+}
+fn mat3_v(a: &[[f64; 3]; 3], v: &[f64; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|i| a[i][0] * v[0] + a[i][1] * v[1] + a[i][2] * v[2])
+}
+fn transpose3(a: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    [0, 1, 2].map(|i| [a[0][i], a[1][i], a[2][i]])
+}
+fn add3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
 /// Roots of Σ cᵢ rⁱ (coefficients lowest first) as (re, im), by the companion matrix, then
 /// polished by complex Newton on the polynomial (so tiny roots next to huge ones keep their
 /// relative accuracy).

@@ -18,6 +18,7 @@ mod forces;
 mod pots;
 mod reading;
 mod stability;
+mod tank;
 
 use crate::error::{InputError, locate};
 use crate::expr::QuadExpr;
@@ -31,6 +32,8 @@ use serde::Deserialize;
 pub use stability::StabilityCondition;
 use stability::StabilityFile;
 use std::collections::BTreeMap;
+use tank::TankFile;
+pub use tank::{Compartment, Tank, Valves};
 
 /// How the rotor's spin is maintained.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
@@ -122,6 +125,8 @@ struct DesignFile {
     force: Vec<ForceFile>,
     #[serde(default)]
     pots: Vec<PotsFile>,
+    #[serde(default)]
+    tank: Vec<TankFile>,
     reading: ReadingFile,
     #[serde(default)]
     stability: Vec<StabilityFile>,
@@ -322,6 +327,8 @@ pub struct Design {
     pub bodies: Vec<Body>,
     pub forces: Vec<Force>,
     pub pots: Vec<Pots>,
+    /// Liquid tanks of N compartments (`[[tank]]`); their levels are the last coordinates.
+    pub tanks: Vec<Tank>,
     pub reading_body: usize,
     pub reading_axis: [f64; 3],
     /// The `[[stability]]` conditions, evaluated (all met unless the design allows otherwise).
@@ -448,6 +455,8 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
     for p in &pots {
         coordinates[p.level].unit = CoordinateUnit::Metre;
     }
+    let (tanks, tank_forces) = tank::tanks(&f.tank, &body_names, &mut coordinates, &src)?;
+    forces.extend(tank_forces);
     let (reading_body, reading_axis) = reading::reading(&f.reading, &body_names, &src)?;
     let stability = stability::stability(&f.stability, f.allow_unstable, &src)?;
     Ok(Design {
@@ -460,6 +469,7 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
         bodies,
         forces,
         pots,
+        tanks,
         reading_body,
         reading_axis,
         stability,

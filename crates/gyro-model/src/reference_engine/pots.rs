@@ -47,44 +47,20 @@ pub(super) fn add<T: Real, const N: usize>(
     let rho_w0 = pots.density_kg_per_m3 * pots.section_m2;
     let c = pots.rest_level_m;
     let a = V3::<Jet<T, N>>::from_f64(pots.axis);
-    let vz = V3::<Jet<T, N>>::zero();
-    let g = V3::<Jet<T, N>>::from_f64(inp.gravity);
 
     // The open columns: point masses ρω₀(c ± u) at base + (c ± u)/2 â.
     for (j, sign) in [(0usize, 1.0), (1, -1.0)] {
         let len = lvl * sign + c;
-        let m = len * rho_w0;
         let r_body = V3::from_f64(pots.bases_m[j]).add(&a.scale(len * 0.5));
-        let x = k.p.add(&k.r.mul_v(&r_body));
-        let jv: [V3<Jet<T, N>>; N] = std::array::from_fn(|i| {
-            if i < n {
-                k.jw[i].cross(&x).sub(&k.jm[i])
-            } else {
-                vz
-            }
-        });
-        let v0 = w0.cross(&x);
-        let mut v_u = vz;
-        for i in 0..n {
-            if inp.u[i] != T::zero() {
-                v_u = v_u.add(&jv[i].scale(Jet::constant(inp.u[i])));
-            }
-        }
-        for i in 0..n {
-            if !dropped(i) {
-                out.p2[i] += jv[i].dot(&v_u) * m;
-            }
-            out.b[i] += jv[i].dot(&v0) * m;
-        }
-        *out.t2 += v_u.dot(&v_u) * m * 0.5;
-        *out.t0 += v0.dot(&v0) * m * 0.5;
-        *out.v -= g.dot(&x) * m;
-        let jvr: [V3<T>; N] = std::array::from_fn(|i| V3(jv[i].0.map(|x| x.v)));
-        for i in (0..n).filter(|&i| !dropped(i)) {
-            for kk in (0..n).filter(|&kk| !dropped(kk)) {
-                out.m[i * n + kk] += jvr[i].dot(&jvr[kk]) * m.v;
-            }
-        }
+        let terms = Terms {
+            p2: &mut *out.p2,
+            b: &mut *out.b,
+            t2: &mut *out.t2,
+            t0: &mut *out.t0,
+            v: &mut *out.v,
+            m: &mut *out.m,
+        };
+        carried_mass(k, &r_body, len * rho_w0, n, inp, w0, terms);
     }
 
     // The flow relative to the carrier: T = u̇ (Σᵢ Gᵢ q̇ᵢ + G₀) + ½ℰu̇².
@@ -142,6 +118,52 @@ pub(super) fn add<T: Real, const N: usize>(
     }
 }
 
+/// A point mass m (a function of the coordinates) at `r_body` in a carrier with kinematics `k`,
+/// moving with the carrier: its kinetic energy, momenta, mass-matrix share and weight.
+pub(super) fn carried_mass<T: Real, const N: usize>(
+    k: &BodyKin<Jet<T, N>, N>,
+    r_body: &V3<Jet<T, N>>,
+    m: Jet<T, N>,
+    n: usize,
+    inp: &EvalInput<T>,
+    w0: &V3<Jet<T, N>>,
+    out: Terms<T, N>,
+) {
+    let dropped = |i: usize| inp.drop_quadratic.get(i).copied().unwrap_or(false);
+    let vz = V3::<Jet<T, N>>::zero();
+    let g = V3::<Jet<T, N>>::from_f64(inp.gravity);
+    let x = k.p.add(&k.r.mul_v(r_body));
+    let jv: [V3<Jet<T, N>>; N] = std::array::from_fn(|i| {
+        if i < n {
+            k.jw[i].cross(&x).sub(&k.jm[i])
+        } else {
+            vz
+        }
+    });
+    let v0 = w0.cross(&x);
+    let mut v_u = vz;
+    for i in 0..n {
+        if inp.u[i] != T::zero() {
+            v_u = v_u.add(&jv[i].scale(Jet::constant(inp.u[i])));
+        }
+    }
+    for i in 0..n {
+        if !dropped(i) {
+            out.p2[i] += jv[i].dot(&v_u) * m;
+        }
+        out.b[i] += jv[i].dot(&v0) * m;
+    }
+    *out.t2 += v_u.dot(&v_u) * m * 0.5;
+    *out.t0 += v0.dot(&v0) * m * 0.5;
+    *out.v -= g.dot(&x) * m;
+    let jvr: [V3<T>; N] = std::array::from_fn(|i| V3(jv[i].0.map(|x| x.v)));
+    for i in (0..n).filter(|&i| !dropped(i)) {
+        for kk in (0..n).filter(|&kk| !dropped(kk)) {
+            out.m[i * n + kk] += jvr[i].dot(&jvr[kk]) * m.v;
+        }
+    }
+}
+
 /// The pots' share of M, K and c alone (added into `out`, whose energies get theirs too), for
 /// an engine that walks the chain its own way: the carriers' kinematics walked here in world
 /// axes, only down to the carriers.
@@ -158,7 +180,10 @@ pub(super) fn evaluate<T: Real, const N: usize>(
     let mut b = [zero; N];
     let (mut t2, mut t0, mut v) = (zero, zero, zero);
     let mut m = [T::zero(); 256];
-    let last = chain.pots.iter().map(|p| p.body).max().unwrap_or(0);
+    let last = (chain.pots.iter().map(|p| p.body))
+        .chain(chain.tanks.iter().map(|t| t.body))
+        .max()
+        .unwrap_or(0);
     let mut kin: Vec<BodyKin<Jet<T, N>, N>> = Vec::with_capacity(last + 1);
     for body in &chain.bodies[..=last] {
         let k = body_kinematics(&kin, body, &q, n, &base_r);
@@ -174,6 +199,17 @@ pub(super) fn evaluate<T: Real, const N: usize>(
             m: &mut m[..n * n],
         };
         add(pots, &kin[pots.body], &q, n, inp, &w0, terms);
+    }
+    for tank in &chain.tanks {
+        let terms = Terms {
+            p2: &mut p2,
+            b: &mut b,
+            t2: &mut t2,
+            t0: &mut t0,
+            v: &mut v,
+            m: &mut m[..n * n],
+        };
+        super::tank::add(tank, &kin[tank.body], &q, n, inp, &w0, terms);
     }
     for i in 0..n {
         out.c[i] += t2.d[i] + t0.d[i] - v.d[i] - p2[i].d[n] - b[i].d[n];
