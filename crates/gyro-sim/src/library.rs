@@ -12,7 +12,8 @@ macro_rules! shipped {
 }
 
 /// Shipped designs: (name, TOML text).
-pub const DESIGNS: &[(&str, &str)] = shipped!("designs"; "foucault-gyroscope", "anschutz-1906", "sperry-1911", "slough", "sperry-twin-1918");
+pub const DESIGNS: &[(&str, &str)] = shipped!("designs"; "foucault-gyroscope", "anschutz-1906", "sperry-1911", "slough", "sperry-twin-1918",
+    "anschutz-three-gyro-1912");
 
 /// Shipped scenes: (name, TOML text).
 pub const SCENES: &[(&str, &str)] = shipped!("scenes";
@@ -29,6 +30,10 @@ pub const SCENES: &[(&str, &str)] = shipped!("scenes";
     "twin-harbour-0n", "twin-harbour-35n", "twin-harbour-60n",
     "twin-run-north-30kn", "twin-speed-change-20kn", "twin-turn-90", "twin-turn-180",
     "twin-zigzag-45", "twin-rolling-cardinal", "twin-rolling-intercardinal",
+    "three-gyro-harbour-0n", "three-gyro-harbour-35n", "three-gyro-harbour-50n",
+    "three-gyro-run-north-30kn", "three-gyro-speed-change-20kn", "three-gyro-turn-90",
+    "three-gyro-turn-180", "three-gyro-zigzag-45", "three-gyro-rolling-cardinal",
+    "three-gyro-rolling-intercardinal", "three-gyro-hermione", "three-gyro-damping-adjustment",
 );
 
 /// One-line description of a TOML file (its `description` key).

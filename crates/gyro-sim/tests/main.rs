@@ -18,5 +18,6 @@ mod slough;
 mod solvers;
 mod solvers_alloc;
 mod sperry;
+mod three_gyro;
 mod twin_gyro;
 mod villarceau;
