@@ -652,7 +652,7 @@ impl ThreeGyro {
         let rotor = d.bodies[d.body_index("south_rotor")?].rotor.as_ref()?;
         // Each body's rotation and origin in the float's axes at rest (hinges at zero).
         let n = d.bodies.len();
-        let mut pose: Vec<Option<([[f64; 3]; 3], [f64; 3])>> = vec![None; n];
+        let mut pose: Vec<Option<Frame3>> = vec![None; n];
         pose[float] = Some((identity3(), [0.0; 3]));
         for i in float + 1..n {
             let b = &d.bodies[i];
@@ -869,6 +869,9 @@ impl ThreeGyro {
         (0.5 * (a + b)).exp()
     }
 }
+
+/// A body's rotation and origin in another body's axes.
+type Frame3 = ([[f64; 3]; 3], [f64; 3]);
 
 fn identity3() -> [[f64; 3]; 3] {
     [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
