@@ -330,6 +330,9 @@ pub mod bodies_record {
     /// Communicating pots the body carries: `<body>.pots.<name>`, a
     /// [`super::PotsDrawing`]'s [`super::PotsDrawing::metadata_value`].
     pub const POTS: &str = "pots";
+    /// A liquid tank the body carries: `<body>.tank.<name>`, a [`super::TankDrawing`]'s
+    /// [`super::TankDrawing::metadata_value`].
+    pub const TANK: &str = "tank";
 
     /// The key of one body's entry: `<body>.<what>`.
     pub fn key(body: &str, what: &str) -> String {
@@ -339,6 +342,11 @@ pub mod bodies_record {
     /// The key of the pots `name` carried by `body`: `<body>.pots.<name>`.
     pub fn pots_key(body: &str, name: &str) -> String {
         format!("{body}.{POTS}.{name}")
+    }
+
+    /// The key of the tank `name` carried by `body`: `<body>.tank.<name>`.
+    pub fn tank_key(body: &str, name: &str) -> String {
+        format!("{body}.{TANK}.{name}")
     }
 }
 
@@ -480,6 +488,56 @@ impl PotsDrawing {
             self.radius_m,
             self.rest_level_m,
             path.join(", ")
+        )
+    }
+}
+
+/// A liquid tank on its carrier (the carrier's frame), as the viewer draws it: each compartment
+/// a column of oil over its floor at `floor_height_m`, `rest_depth_m` plus its level high, the
+/// level Σ coefficient × compass-state field (the last compartment's follows from the others').
+#[derive(Debug, Clone, PartialEq)]
+pub struct TankDrawing {
+    pub rest_depth_m: f64,
+    pub floor_height_m: f64,
+    pub compartments: Vec<TankCompartmentDrawing>,
+}
+
+/// One compartment of a [`TankDrawing`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct TankCompartmentDrawing {
+    pub centroid_m: [f64; 2],
+    /// Radius of a circle of the compartment's area.
+    pub radius_m: f64,
+    pub level_fields: Vec<String>,
+    pub level_coefficients: Vec<f64>,
+}
+
+impl TankDrawing {
+    /// A TOML inline table with the struct's field names as keys.
+    pub fn metadata_value(&self) -> String {
+        let comps: Vec<String> = self
+            .compartments
+            .iter()
+            .map(|c| {
+                let fields: Vec<String> =
+                    c.level_fields.iter().map(|f| format!("\"{f}\"")).collect();
+                let coefs: Vec<String> =
+                    c.level_coefficients.iter().map(|x| format!("{x:?}")).collect();
+                format!(
+                    "{{ centroid_m = [{:?}, {:?}], radius_m = {:?}, level_fields = [{}], level_coefficients = [{}] }}",
+                    c.centroid_m[0],
+                    c.centroid_m[1],
+                    c.radius_m,
+                    fields.join(", "),
+                    coefs.join(", ")
+                )
+            })
+            .collect();
+        format!(
+            "{{ rest_depth_m = {:?}, floor_height_m = {:?}, compartments = [{}] }}",
+            self.rest_depth_m,
+            self.floor_height_m,
+            comps.join(", ")
         )
     }
 }

@@ -8,9 +8,9 @@ use crate::run::{ManoeuvreEvent, Progress, RunError, RunObserver, RunProbe, RunS
 use crate::scene::Scene;
 use crate::solvers::StopReason;
 use gyro_mcap::contract::{
-    BodyShape, PotsDrawing, attachments, bodies_record, compass_state, design_constants_record,
-    design_record, energy, events, result_record, run_record, scene_record, ship_state,
-    solver_stats, status, tf,
+    BodyShape, PotsDrawing, TankCompartmentDrawing, TankDrawing, attachments, bodies_record,
+    compass_state, design_constants_record, design_record, energy, events, result_record,
+    run_record, scene_record, ship_state, solver_stats, status, tf,
 };
 use gyro_mcap::{ChannelId, Pose, RecordingError, RecordingWriter, Value, WriterOptions};
 use gyro_model::constants::{EARTH_RADIUS_M, schuler_period_s};
@@ -607,6 +607,47 @@ fn bodies_metadata(model: &CompiledModel<ShipProgram>) -> BTreeMap<String, Strin
         };
         m.insert(
             bodies_record::pots_key(&model.design.bodies[p.body].name, &p.name),
+            drawing.metadata_value(),
+        );
+    }
+    for t in &model.design.tanks {
+        let fields: Vec<String> = t
+            .levels
+            .iter()
+            .map(|&l| {
+                let c = &model.design.coordinates[l];
+                compass_state::coordinate_field(&c.name, c.unit.symbol())
+            })
+            .collect();
+        let compartments = (0..t.compartments.len())
+            .map(|i| {
+                let c = &t.compartments[i];
+                let coefficients = if t.levels.is_empty() {
+                    Vec::new()
+                } else {
+                    t.level_coefficients(i)
+                };
+                let (level_fields, level_coefficients) = fields
+                    .iter()
+                    .zip(coefficients)
+                    .filter(|(_, a)| *a != 0.0)
+                    .map(|(f, a)| (f.clone(), a))
+                    .unzip();
+                TankCompartmentDrawing {
+                    centroid_m: c.centroid_m,
+                    radius_m: (c.area_m2 / std::f64::consts::PI).sqrt(),
+                    level_fields,
+                    level_coefficients,
+                }
+            })
+            .collect();
+        let drawing = TankDrawing {
+            rest_depth_m: t.rest_depth_m,
+            floor_height_m: t.floor_height_m,
+            compartments,
+        };
+        m.insert(
+            bodies_record::tank_key(&model.design.bodies[t.body].name, &t.name),
             drawing.metadata_value(),
         );
     }

@@ -50,6 +50,53 @@ pub(crate) struct BodyInfo {
     pub rotor: Option<([f64; 3], f64)>,
     /// Communicating pots the body carries, by name.
     pub pots: Vec<(String, PotsInfo)>,
+    /// Liquid tanks the body carries, by name.
+    pub tanks: Vec<(String, TankInfo)>,
+}
+
+/// A liquid tank as recorded (`gyro_mcap::contract::TankDrawing`, carrier's frame).
+#[derive(Debug, Clone, Deserialize)]
+pub(crate) struct TankInfo {
+    pub rest_depth_m: f64,
+    pub floor_height_m: f64,
+    pub compartments: Vec<TankCompartmentInfo>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+pub(crate) struct TankCompartmentInfo {
+    pub centroid_m: [f64; 2],
+    pub radius_m: f64,
+    #[serde(default)]
+    pub level_fields: Vec<String>,
+    #[serde(default)]
+    pub level_coefficients: Vec<f64>,
+}
+
+#[derive(Deserialize)]
+struct TankHolder {
+    tank: TankInfo,
+}
+
+/// Parses a `<body>.tank.<name>` metadata value.
+pub(crate) fn parse_tank(text: &str) -> Result<TankInfo, String> {
+    let t = toml::from_str::<TankHolder>(&format!("tank = {text}"))
+        .map(|h| h.tank)
+        .map_err(|e| e.message().to_owned())?;
+    let fine = t.rest_depth_m > 0.0
+        && t.rest_depth_m.is_finite()
+        && t.floor_height_m.is_finite()
+        && !t.compartments.is_empty()
+        && t.compartments.iter().all(|c| {
+            c.centroid_m.iter().all(|x| x.is_finite())
+                && c.radius_m > 0.0
+                && c.radius_m.is_finite()
+                && c.level_fields.len() == c.level_coefficients.len()
+                && c.level_coefficients.iter().all(|x| x.is_finite())
+        });
+    if !fine {
+        return Err("a tank needs a positive depth, compartments with finite centroids, positive radii and one coefficient per level field".into());
+    }
+    Ok(t)
 }
 
 /// Communicating pots as recorded (`gyro_mcap::contract::PotsDrawing`, carrier's frame).
@@ -313,10 +360,22 @@ fn bodies(
                     shape,
                     rotor,
                     pots: Vec::new(),
+                    tanks: Vec::new(),
                 },
             );
         }
         for (key, value) in entries {
+            if let Some((body, name)) = key.split_once(&format!(".{}.", bodies_record::TANK)) {
+                let tank = parse_tank(value).map_err(|detail| ViewError::Metadata {
+                    path: path.to_path_buf(),
+                    key: format!("{}/{key}", bodies_record::NAME),
+                    detail,
+                })?;
+                if let Some(b) = out.get_mut(body) {
+                    b.tanks.push((name.to_owned(), tank));
+                }
+                continue;
+            }
             let Some((body, name)) = key.split_once(&format!(".{}.", bodies_record::POTS)) else {
                 continue;
             };

@@ -12,7 +12,7 @@ use rerun::{
 };
 
 use crate::math::{self, Quat, TiltExaggeration};
-use crate::run::{BodyInfo, EARTH_FRAME, PotsInfo, RunData, Track};
+use crate::run::{BodyInfo, EARTH_FRAME, PotsInfo, RunData, TankInfo, Track};
 use crate::{ViewError, ViewOptions, decimate, sim_time};
 
 /// Colours of bodies by depth in the chain.
@@ -351,6 +351,74 @@ fn log_pots(
     Ok(())
 }
 
+/// A liquid tank on its carrier, at `<carrier>/tank/<name>`: each compartment's outline, 2c
+/// high (static), and its oil column, c + h high, from the recorded levels.
+fn log_tank(
+    rec: &RecordingStream,
+    entity: &str,
+    name: &str,
+    tank: &TankInfo,
+    run: &RunData,
+    opts: &ViewOptions,
+) -> Result<(), ViewError> {
+    let root = format!("{entity}/tank/{}", crate::run::entity_name(name));
+    let c = tank.rest_depth_m;
+    let floor = tank.floor_height_m;
+    let oil = Color::from_rgb(196, 150, 60);
+    let n = tank.compartments.len();
+    rec.log_static(
+        format!("{root}/outline"),
+        &Cylinders3D::from_lengths_and_radii(
+            vec![(2.0 * c) as f32; n],
+            tank.compartments.iter().map(|k| k.radius_m as f32),
+        )
+        .with_centers(
+            tank.compartments
+                .iter()
+                .map(|k| f32x3([k.centroid_m[0], k.centroid_m[1], floor + c])),
+        )
+        .with_colors([Color::from_rgb(120, 120, 130)])
+        .with_fill_mode(FillMode::MajorWireframe),
+    )?;
+    let kept = decimate(&run.compass.time_ns, opts);
+    let time = sim_time(kept.iter().map(|&k| run.compass.time_ns[k]).collect());
+    for (i, comp) in tank.compartments.iter().enumerate() {
+        let fields: Option<Vec<&[f64]>> = comp
+            .level_fields
+            .iter()
+            .map(|f| run.compass.get(f))
+            .collect();
+        let Some(fields) = fields else {
+            continue;
+        };
+        let column = format!("{root}/compartment_{}", i + 1);
+        rec.log_static(
+            format!("{column}/oil"),
+            &Cylinders3D::from_lengths_and_radii([1.0_f32], [comp.radius_m as f32])
+                .with_colors([oil])
+                .with_fill_mode(FillMode::Solid),
+        )?;
+        let height = |k: usize| {
+            let h: f64 = fields
+                .iter()
+                .zip(&comp.level_coefficients)
+                .map(|(f, a)| a * f[k])
+                .sum();
+            (c + h).max(0.0)
+        };
+        let (x, y) = (comp.centroid_m[0], comp.centroid_m[1]);
+        rec.send_columns(
+            column.as_str(),
+            [time.clone()],
+            Transform3D::update_fields()
+                .with_many_translation(kept.iter().map(|&k| f32x3([x, y, floor + 0.5 * height(k)])))
+                .with_many_scale(kept.iter().map(|&k| [1.0, 1.0, height(k) as f32]))
+                .columns_of_unit_batches()?,
+        )?;
+    }
+    Ok(())
+}
+
 /// Frame name → entity path, and frame name → depth below the earth frame.
 type FramePaths = (BTreeMap<String, String>, BTreeMap<String, usize>);
 
@@ -521,6 +589,9 @@ pub(crate) fn log_scene(
             log_spin_marker(rec, path, info, &time, s.time_ns.len())?;
             for (pots_name, pots) in &info.pots {
                 log_pots(rec, path, pots_name, pots, run, opts)?;
+            }
+            for (tank_name, tank) in &info.tanks {
+                log_tank(rec, path, tank_name, tank, run, opts)?;
             }
             hull_drawn |= matches!(info.shape, Shape::Hull { .. });
         }

@@ -476,6 +476,52 @@ fn the_default_fit_is_the_analysis_crates_and_is_drawn_over_the_data() {
     assert!(worst < 1e-6, "fit vs data: {worst:e}°");
 }
 
+/// A liquid tank on a body: the compartments' outlines are static in the carrier's frame, and
+/// each compartment's oil is a unit cylinder scaled to c + Σ aᵢ·levelᵢ and centred half way up
+/// over its floor, at every kept sample, from the recorded levels.
+#[test]
+fn tank_is_drawn_with_its_recorded_levels() {
+    let dir = workdir("tank");
+    let run = dir.join("tank.mcap");
+    common::write_recording_with_pots(&run, SAMPLES, RATE_HZ);
+    let rrd = dir.join("tank.rrd");
+    let opts = ViewOptions {
+        sink: Sink::Save(rrd.clone()),
+        max_pose_rate_hz: 1.0,
+        ..Default::default()
+    };
+    view(std::slice::from_ref(&run), &opts).expect("view");
+    let Some(py) = rerun_python() else { return };
+    let d = dump(&py, &rrd);
+    let tank = "/runs/tank/earth/ship/gimbal/float/tank/oil";
+    assert!(has_static(&d, &format!("{tank}/outline"), "Cylinders3D"));
+    let drawing = common::tank();
+    for (i, comp) in drawing.compartments.iter().enumerate() {
+        let column = format!("{tank}/compartment_{}", i + 1);
+        assert!(has_static(&d, &format!("{column}/oil"), "Cylinders3D"));
+        let (t, scale) = temporal(&d, &column, "scale");
+        let (tt, translation) = temporal(&d, &column, "translation");
+        assert_eq!(t.len(), 601, "{column}: one column a kept sample");
+        assert_eq!(t, tt);
+        for (k, &ns) in t.iter().enumerate() {
+            let h = drawing.rest_depth_m
+                + comp.level_coefficients[0] * common::mercury_level(ns as f64 * 1e-9);
+            let s = f64s(&scale[k][0]);
+            let x = f64s(&translation[k][0]);
+            assert!(
+                (s[2] - h).abs() < 1e-6,
+                "{column}[{k}]: height {} vs {h}",
+                s[2]
+            );
+            assert!(
+                (x[2] - (drawing.floor_height_m + 0.5 * h)).abs() < 1e-6,
+                "{column}[{k}]: centre"
+            );
+            assert!((x[0] - comp.centroid_m[0]).abs() < 1e-6);
+        }
+    }
+}
+
 /// Communicating pots on a body: the tube and the pots' outlines are static in the carrier's
 /// frame, and each pot's liquid column is a unit cylinder scaled to c ± u and centred half way
 /// up, at every kept sample, from the recorded level.

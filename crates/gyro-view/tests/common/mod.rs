@@ -7,8 +7,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use gyro_mcap::contract::{
-    BodyShape, PotsDrawing, bodies_record, compass_state, design_record, events, result_record,
-    run_record, ship_state, status, tf,
+    BodyShape, PotsDrawing, TankCompartmentDrawing, TankDrawing, bodies_record, compass_state,
+    design_record, events, result_record, run_record, ship_state, status, tf,
 };
 use gyro_mcap::{Pose, RecordingWriter, Value, WriterOptions};
 
@@ -82,6 +82,22 @@ pub fn pots() -> PotsDrawing {
         radius_m: 0.01,
         rest_level_m: 0.03,
         tube_path_m: vec![[-0.1, 0.0, -0.02], [0.1, 0.0, -0.02]],
+    }
+}
+
+/// The two-compartment tank [`write_recording_with_pots`] also puts on the float: its levels
+/// are ±u (the second compartment's follows from the first's, as a tank's last one does).
+pub fn tank() -> TankDrawing {
+    let compartment = |x: f64, a: f64| TankCompartmentDrawing {
+        centroid_m: [x, 0.05],
+        radius_m: 0.02,
+        level_fields: vec!["u_m".into()],
+        level_coefficients: vec![a],
+    };
+    TankDrawing {
+        rest_depth_m: 0.01,
+        floor_height_m: -0.07,
+        compartments: vec![compartment(0.05, 1.0), compartment(-0.05, -1.0)],
     }
 }
 
@@ -241,6 +257,10 @@ fn write(path: &Path, n: usize, rate_hz: f64, with_pots: bool) {
         bodies.insert(
             bodies_record::pots_key("float", "mercury"),
             pots().metadata_value(),
+        );
+        bodies.insert(
+            bodies_record::tank_key("float", "oil"),
+            tank().metadata_value(),
         );
     }
     w.write_metadata(bodies_record::NAME, &bodies)
