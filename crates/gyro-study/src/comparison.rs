@@ -878,6 +878,8 @@ dial: the Sperry's and the Slough's latitude error is not a rolling error); *run
             );
         }
 
+        s.push_str(LIMITS);
+
         // Cost.
         s.push_str("## What the comparison costs\n\n");
         if let Some(Slowest {
@@ -965,6 +967,20 @@ under oblique accelerations, §58); no test pins the cause down.",
         s
     }
 }
+
+/// What the comparison does not settle, whatever its numbers.
+const LIMITS: &str = "## Limits of this comparison\n\n\
+- The text gives neither the Hermione trial's latitude nor its deceleration: 50°N and 60 s are the scene's choice, and the \
+trial's periods (Slough > 85 min, three-gyro ≈ 70 min) are compared with the periods fitted on the 50°N release.\n\
+- The back-swing is the card's mean rate 2–8 min after the speed change (a fixed window, short against every compass's \
+period): the text's ζ′ at the end of the perturbation, once the Slough's 30-s mercury has followed.\n\
+- Rolling errors are taken net of each design's settled reading on `compare-harbour-50n` (same latitude, same dial); the \
+Anschütz 1906 is compensated at 50°N, the others carry their own latitude errors.\n\
+- The rolling scenes integrate with DOP853 (rtol 1e-7, atol 1e-6) like the shipped rolling scenes; a study sets one \
+integrator per scene, not per design, so a design with very stiff parts (a many-compartment tank) runs explicit there.\n\
+- The twin-gyro as shipped does not apply the compensation (54) that the factor (61) assumes; (61) is computed from \
+the design's own x = kl², y = M and τ, and reaches 2/3 only for M ≫ x, τ.\n\
+- *Who errs least where* ranks by one key error per scene; the per-scene tables are the evidence.\n\n";
 
 /// The error a scene is judged by (None: not ranked).
 pub fn key_metric(scene: &str) -> Option<&'static str> {
