@@ -499,8 +499,12 @@ pub struct Timing {
     /// Wall time of the sweep (every run, on `threads` threads), s.
     pub sweep_wall_s: f64,
     pub threads: usize,
-    /// When it was measured (RFC 3339-ish, UTC seconds since the epoch if nothing better).
+    /// When it was measured (UTC).
     pub measured_at: String,
+    /// The machine's 1-minute load average when the sweep started (other work sharing the
+    /// cores slows every run), if known.
+    #[serde(default)]
+    pub load_average_at_start: Option<f64>,
 }
 
 /// Where the comparison's time goes: the slowest run, the slowest scene (its designs' runs
@@ -893,13 +897,16 @@ dial: the Sperry's and the Slough's latitude error is not a rolling error); *run
         {
             match &self.timing {
                 Some(t) => s.push_str(&format!(
-                    "The whole sweep ({} runs) took **{:.1} s** of wall time on {} thread(s) ({}); its runs took {:.1} s in all (simulate, record, analyse). \
+                    "The whole sweep ({} runs) took **{:.1} s** of wall time on {} thread(s) ({}{}); its runs took {:.1} s in all (simulate, record, analyse). \
 The slowest scene, `{ss}`, took {st:.1} s over its designs ({:.0} % of the runs' time; {:.0} % of the wall time were it run alone on one core); \
 the slowest run, `{rd}` on `{rs}`, {rt:.1} s ({:.0} % of the wall time).\n\n",
                     self.entries.len(),
                     t.sweep_wall_s,
                     t.threads,
                     t.measured_at,
+                    t.load_average_at_start.map_or(String::new(), |l| format!(
+                        ", load average {l:.2} when it started"
+                    )),
                     total,
                     100.0 * st / total,
                     100.0 * st / t.sweep_wall_s,

@@ -92,6 +92,9 @@ pub fn comparison(a: ComparisonArgs) -> Result<ExitCode, CliError> {
     if a.quiet || a.json {
         b.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
+    let load = std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|l| l.split_whitespace().next()?.parse::<f64>().ok());
     let summary = sweep::run_local(&plan, &a.out, threads, &interrupt, |p: &Progress, row| {
         if b.length() == Some(0) {
             b.set_length(p.to_run);
@@ -128,6 +131,7 @@ pub fn comparison(a: ComparisonArgs) -> Result<ExitCode, CliError> {
                 clock(secs),
                 secs / 86400
             ),
+            load_average_at_start: load,
         };
         let text = serde_json::to_string_pretty(&t).map_err(failed)?;
         gyro_study::table::write_atomically(&comparison::timing_path(&a.out), text.as_bytes())
