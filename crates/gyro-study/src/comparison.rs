@@ -805,7 +805,7 @@ the list.{}\n\n",
         s.push_str("\n## Verdict: the text's comparative claims\n\n");
         let count = |v: Verdict| self.claims.iter().filter(|c| c.verdict == v).count();
         s.push_str(&format!(
-            "{} reproduced, {} not reproduced, {} not evaluated (checked by `crates/gyro-study/tests/comparison.rs` on every regeneration's logic).\n\n",
+            "{} reproduced, {} not reproduced, {} not evaluated (the verdict's logic, and the claims the shipped designs reproduce, are tested in `crates/gyro-study/tests/comparison.rs`).\n\n",
             count(Verdict::Reproduced),
             count(Verdict::NotReproduced),
             count(Verdict::NotEvaluated)
