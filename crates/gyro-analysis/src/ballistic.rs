@@ -96,6 +96,12 @@ pub struct BallisticOptions {
     pub band_rad: f64,
     /// Relative settling band, a fraction of the peak (default 0.1); the wider of the two is used.
     pub band_fraction: f64,
+    /// The back-swing is measured from this long after the manoeuvre's end (default 120 s: the
+    /// text's t₂, "une ou deux minutes" after the perturbation, once a liquid ballistic has
+    /// followed it) …
+    pub backswing_delay_s: f64,
+    /// … over this window (default 360 s, short against any compass period: the initial rate).
+    pub backswing_window_s: f64,
     pub fit: FitOptions,
 }
 
@@ -104,6 +110,8 @@ impl Default for BallisticOptions {
         Self {
             band_rad: 0.1_f64.to_radians(),
             band_fraction: 0.1,
+            backswing_delay_s: 120.0,
+            backswing_window_s: 360.0,
             fit: FitOptions::default(),
         }
     }
@@ -150,6 +158,13 @@ pub struct BallisticDeviation {
     pub expected_ballistic_deflection_rad: Option<f64>,
     /// Deviation from the new equilibrium just after the manoeuvre: (T_S²/T² − 1)·Δζ_eq.
     pub expected_peak_deviation_rad: Option<f64>,
+    /// How far the card has swung from its old equilibrium when the back-swing window opens
+    /// (error at end + `backswing_delay_s` minus the equilibrium before), rad.
+    pub swing_rad: Option<f64>,
+    /// The card's rate over the back-swing window (least-squares slope), rad/s: Beghin §70's ζ′
+    /// after a speed change, of the opposite sign to `swing_rad` when the damper drives the card
+    /// back at once (the Slough's mercury, the three-gyro's oil).
+    pub backswing_rate_rad_per_s: Option<f64>,
 }
 
 /// Latitude at `t` from the ship channel's samples, when given.
@@ -160,6 +175,27 @@ fn latitude_at(ship: Option<(&[f64], &[f64])>, t: f64) -> Option<f64> {
     }
     let i = ts.partition_point(|v| *v < t).min(ts.len() - 1);
     lat.get(i).copied().filter(|v| v.is_finite())
+}
+
+/// Least-squares slope of (t, x) over [a, b], finite samples only; `None` with fewer than 3.
+pub fn slope(t: &[f64], x: &[f64], a: f64, b: f64) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = t
+        .iter()
+        .zip(x)
+        .filter(|(ti, xi)| **ti >= a && **ti <= b && xi.is_finite())
+        .map(|(ti, xi)| (*ti, *xi))
+        .collect();
+    if pts.len() < 3 {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let (mt, mx) = pts
+        .iter()
+        .fold((0.0, 0.0), |(st, sx), (ti, xi)| (st + ti / n, sx + xi / n));
+    let (sxy, sxx) = pts.iter().fold((0.0, 0.0), |(sxy, sxx), (ti, xi)| {
+        (sxy + (ti - mt) * (xi - mx), sxx + (ti - mt) * (ti - mt))
+    });
+    (sxx > 0.0).then(|| sxy / sxx)
 }
 
 /// The ballistic deviation after every manoeuvre of (t, error): `events` as read by
@@ -257,6 +293,8 @@ fn one_deviation(
         expected_schuler_deviation_rad: 0.0,
         expected_ballistic_deflection_rad: shift.zip(ratio).map(|(s, r)| r * s),
         expected_peak_deviation_rad: shift.zip(ratio).map(|(s, r)| (r - 1.0) * s),
+        swing_rad: None,
+        backswing_rate_rad_per_s: None,
     };
     let range = |a: f64, b: f64| {
         (
@@ -274,6 +312,13 @@ fn one_deviation(
     };
     let (before, _) = steady(previous_end, start.time_s);
     d.equilibrium_before_rad = before.value.map(|v| v.value);
+    let w0 = end.time_s + opts.backswing_delay_s;
+    let w1 = (w0 + opts.backswing_window_s).min(next_start);
+    if let Some(rate) = slope(t, error, w0, w1) {
+        let (i0, _) = range(w0, w1);
+        d.backswing_rate_rad_per_s = Some(rate);
+        d.swing_rad = d.equilibrium_before_rad.map(|b| error[i0] - b);
+    }
     let (after, period) = steady(end.time_s, next_start);
     let Some(eq) = after.value else {
         d.quality = after.quality;

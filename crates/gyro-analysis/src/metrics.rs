@@ -104,6 +104,11 @@ pub struct RunMetrics {
     pub ballistic_expected_peak_rad: Option<f64>,
     /// The longest settle time over the manoeuvres (None if one never settles).
     pub ballistic_settle_s: Option<f64>,
+    /// Of the manoeuvre with the largest peak: how far the card had swung from its old
+    /// equilibrium 2 min after the end, and its rate over the next 6 min (Beghin §70's
+    /// back-swing: of the opposite sign when the damper drives the card back at once).
+    pub ballistic_swing_rad: Option<f64>,
+    pub ballistic_backswing_rate_rad_per_s: Option<f64>,
     pub rolling_error_rad: Option<f64>,
     pub rolling_error_sigma_rad: Option<f64>,
     pub roll_period_s: Option<f64>,
@@ -182,6 +187,11 @@ impl RunMetrics {
                 F64(self.ballistic_expected_peak_rad),
             ),
             ("ballistic_settle_s", F64(self.ballistic_settle_s)),
+            ("ballistic_swing_rad", F64(self.ballistic_swing_rad)),
+            (
+                "ballistic_backswing_rate_rad_per_s",
+                F64(self.ballistic_backswing_rate_rad_per_s),
+            ),
             ("rolling_error_rad", F64(self.rolling_error_rad)),
             ("rolling_error_sigma_rad", F64(self.rolling_error_sigma_rad)),
             ("roll_period_s", F64(self.roll_period_s)),
@@ -441,6 +451,8 @@ pub(crate) fn set_cell(r: &mut RunMetrics, name: &str, cell: Cell) {
         "ballistic_peak_rad" => r.ballistic_peak_rad = f(),
         "ballistic_expected_peak_rad" => r.ballistic_expected_peak_rad = f(),
         "ballistic_settle_s" => r.ballistic_settle_s = f(),
+        "ballistic_swing_rad" => r.ballistic_swing_rad = f(),
+        "ballistic_backswing_rate_rad_per_s" => r.ballistic_backswing_rate_rad_per_s = f(),
         "rolling_error_rad" => r.rolling_error_rad = f(),
         "rolling_error_sigma_rad" => r.rolling_error_sigma_rad = f(),
         "roll_period_s" => r.roll_period_s = f(),
@@ -756,6 +768,8 @@ fn summarise(
         ballistic_peak_rad: worst.and_then(|b| b.peak_deviation_rad),
         ballistic_expected_peak_rad: worst.and_then(|b| b.expected_peak_deviation_rad),
         ballistic_settle_s: settle,
+        ballistic_swing_rad: worst.and_then(|b| b.swing_rad),
+        ballistic_backswing_rate_rad_per_s: worst.and_then(|b| b.backswing_rate_rad_per_s),
         rolling_error_rad: rolling.and_then(|r| v(r.mean_error)),
         rolling_error_sigma_rad: rolling.and_then(|r| sd(r.mean_error)),
         roll_period_s: rolling.map(|r| r.roll_period_s).filter(|p| p.is_finite()),

@@ -15,8 +15,11 @@
 //! - [`exec`]: one run, and a list of runs on a pool of threads;
 //! - [`table`]: rows, Parquet parts, the merge into `metrics.parquet`;
 //! - [`sweep`]: the local engine, a Ray task's chunk, a folder's status, the plan's estimate;
-//! - [`report`]: tables and plots of the metrics against the axes.
+//! - [`report`]: tables and plots of the metrics against the axes;
+//! - [`comparison`]: every design on one standard scene set, and the text's comparative claims
+//!   checked against the metrics (`gyrolab comparison`, docs/comparison.md).
 
+pub mod comparison;
 pub mod draw;
 pub mod exec;
 pub mod plan;

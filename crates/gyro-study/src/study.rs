@@ -300,6 +300,8 @@ pub const METRICS: &[&str] = &[
     "ballistic_peak_rad",
     "ballistic_expected_peak_rad",
     "ballistic_settle_s",
+    "ballistic_swing_rad",
+    "ballistic_backswing_rate_rad_per_s",
     "rolling_error_rad",
     "rolling_error_sigma_rad",
     "roll_period_s",

@@ -3,6 +3,7 @@
 
 mod common;
 
+mod comparison;
 mod local;
 mod shipped;
 mod study_file;

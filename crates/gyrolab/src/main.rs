@@ -4,6 +4,7 @@
 //! 130 interrupted by Ctrl-C (the recording is still closed and valid).
 
 mod commands;
+mod comparison;
 mod sweep;
 
 use clap::{Parser, Subcommand};
@@ -145,6 +146,10 @@ enum Command {
     /// Design studies: grids and Monte Carlo samples of scenes and designs, on every core or
     /// on a Ray cluster, metrics as Parquet (plan, run, status, report).
     Sweep(sweep::SweepArgs),
+    /// The compasses compared: every design of the comparison study on its standard scenes,
+    /// metrics per design × scene, figures, and the text's comparative claims checked, written
+    /// as a Markdown report (docs/comparison.md).
+    Comparison(comparison::ComparisonArgs),
 }
 
 fn main() -> ExitCode {
@@ -198,6 +203,7 @@ fn main() -> ExitCode {
             list,
         }),
         Command::Sweep(cmd) => sweep::sweep(cmd),
+        Command::Comparison(args) => comparison::comparison(args),
     };
     match result {
         Ok(code) => code,

@@ -1,0 +1,1130 @@
+//! The compasses compared as Beghin compares them (issue 14, "the six compared"): a sweep of
+//! every design of a study over one standard scene set (`sweeps/six-compared.toml`), read back
+//! as one entry of fitted metrics per design × scene, and the text's own comparative claims
+//! checked against those metrics, each with its tolerance, as reproduced, not reproduced, or not
+//! evaluated (a claim whose design is not in the study). The claims name the text's designs and
+//! the standard scenes by name; a design added to the study's list is one more column of every
+//! table, and the three-gyro's claims are evaluated as soon as `anschutz-three-gyro-1912` is in
+//! it.
+//!
+//! [`evaluate`] is pure (entries and a few design constants in, claims out), so the verdict's
+//! logic is tested on its own; [`Comparison::load`] reads a sweep folder; [`Comparison::render`]
+//! writes the Markdown report and [`write_plots`] its SVG figures.
+
+use crate::plan::Plan;
+use crate::table::{self, OK};
+use gyro_analysis::plot::{Figure, PALETTE, Series};
+use gyro_model::constants::{EARTH_RATE_RAD_PER_S, STANDARD_GRAVITY_M_PER_S2};
+use gyro_model::theory::{Sperry1911, TwinGyro, rolling_error_magnitude_rad};
+use polars::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+
+/// The text's designs, by their files' `name`.
+pub const ANSCHUTZ_1906: &str = "anschutz-1906";
+pub const SPERRY_1911: &str = "sperry-1911";
+pub const SLOUGH: &str = "slough";
+pub const TWIN_1918: &str = "sperry-twin-1918";
+pub const THREE_GYRO_1912: &str = "anschutz-three-gyro-1912";
+
+/// The standard scenes the claims read.
+pub const HARBOUR_50N: &str = "compare-harbour-50n";
+pub const ROLLING_000: &str = "compare-rolling-000";
+pub const ROLLING_045: &str = "compare-rolling-045";
+pub const HERMIONE: &str = "compare-hermione-10kn";
+
+/// Knots to m/s.
+const KNOT_M_PER_S: f64 = 1852.0 / 3600.0;
+
+/// One run of the comparison: a design on a scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct Entry {
+    pub scene: String,
+    pub design: String,
+    pub run_index: u64,
+    pub status: String,
+    pub reason: String,
+    /// The fitted metrics the run has (NaN-free), by column name (SI units in the names).
+    pub metrics: BTreeMap<String, f64>,
+    pub run_wall_time_s: f64,
+    /// The kept recording, relative to the sweep folder (empty if none).
+    pub recording: String,
+}
+
+impl Entry {
+    pub fn metric(&self, name: &str) -> Option<f64> {
+        self.metrics.get(name).copied().filter(|v| v.is_finite())
+    }
+}
+
+/// What a claim came to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Verdict {
+    Reproduced,
+    NotReproduced,
+    /// A design (or a run) the claim needs is not in the comparison.
+    NotEvaluated,
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Verdict::Reproduced => "reproduced",
+            Verdict::NotReproduced => "not reproduced",
+            Verdict::NotEvaluated => "not evaluated",
+        })
+    }
+}
+
+/// One of the text's comparative claims, checked.
+#[derive(Clone, Debug, Serialize)]
+pub struct Claim {
+    pub id: &'static str,
+    /// The claim as the text makes it, with where.
+    pub claim: &'static str,
+    /// The designs it needs.
+    pub designs: Vec<&'static str>,
+    /// What counts as reproducing it.
+    pub tolerance: &'static str,
+    /// What was measured, in words and numbers (or why it was not evaluated).
+    pub measured: String,
+    pub verdict: Verdict,
+    /// The numbers behind `measured`, by name (SI units in the names).
+    pub values: BTreeMap<String, f64>,
+}
+
+/// Design constants some claims need beside the metrics (closed forms from each design's own
+/// numbers at the scene's latitude and sea).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Constants {
+    /// The twin-gyro's two gyros in the same sense on one frame (2IΩ, 3ap) on the standard sea
+    /// at 045°: ½ |sinΔ cosΔ| (J₀/g)² 3ap/(2τ), rad; and the factor (61) on it.
+    pub twin_single_frame_error_rad: Option<f64>,
+    pub twin_rolling_factor: Option<f64>,
+    /// The Sperry's pendulum (Ql + ϖb) as an Anschütz on the standard sea at 045°: the error
+    /// its gyro-ballistic remedy is to remove, rad; and Re H(is) of its pendulum at the roll
+    /// period (the share (48) leaves).
+    pub sperry_anschutz_type_error_rad: Option<f64>,
+    pub sperry_re_h: Option<f64>,
+    pub sperry_pendulum_period_s: Option<f64>,
+    /// The twin-gyro's two periods at 50°N (the quartic of eq. 24 from its own numbers), s.
+    pub twin_periods_50n_s: Option<[f64; 2]>,
+    /// The Hermione scene's speed change δv_x (m/s, North positive) and latitude (rad).
+    pub hermione_delta_v_m_per_s: Option<f64>,
+    pub hermione_latitude_rad: Option<f64>,
+}
+
+fn find<'a>(entries: &'a [Entry], scene: &str, design: &str) -> Option<&'a Entry> {
+    entries
+        .iter()
+        .find(|e| e.scene == scene && e.design == design && e.status == OK)
+}
+
+fn has_design(entries: &[Entry], design: &str) -> bool {
+    entries.iter().any(|e| e.design == design)
+}
+
+fn deg(x: f64) -> f64 {
+    x.to_degrees()
+}
+
+/// A claim not evaluated: which design or run it lacks.
+fn missing(mut c: Claim, entries: &[Entry], needs: &[(&str, &str)]) -> Claim {
+    let absent: Vec<&str> = c
+        .designs
+        .iter()
+        .copied()
+        .filter(|d| !has_design(entries, d))
+        .collect();
+    c.measured = if !absent.is_empty() {
+        format!(
+            "not evaluated: {} not in the comparison's design list",
+            absent.join(", ")
+        )
+    } else {
+        let lacking: Vec<String> = needs
+            .iter()
+            .filter(|(s, d)| find(entries, s, d).is_none())
+            .map(|(s, d)| format!("{d} on {s}"))
+            .collect();
+        format!(
+            "not evaluated: no successful run or metric for {}",
+            if lacking.is_empty() {
+                "a metric it needs".to_string()
+            } else {
+                lacking.join(", ")
+            }
+        )
+    };
+    c.verdict = Verdict::NotEvaluated;
+    c
+}
+
+fn claim(
+    id: &'static str,
+    claim: &'static str,
+    designs: &[&'static str],
+    tolerance: &'static str,
+) -> Claim {
+    Claim {
+        id,
+        claim,
+        designs: designs.to_vec(),
+        tolerance,
+        measured: String::new(),
+        verdict: Verdict::NotEvaluated,
+        values: BTreeMap::new(),
+    }
+}
+
+fn verdict(ok: bool) -> Verdict {
+    if ok {
+        Verdict::Reproduced
+    } else {
+        Verdict::NotReproduced
+    }
+}
+
+/// A design's rolling error on `scene` net of its calm equilibrium: the mean reading under the
+/// sea minus the settled reading of its 50°N release (the same latitude and dial), rad. The
+/// Sperry's and the Slough's latitude errors (−ρ tan L) would otherwise count as rolling errors.
+pub fn rolling_net(entries: &[Entry], scene: &str, design: &str) -> Option<f64> {
+    let rolling = find(entries, scene, design)?.metric("rolling_error_rad")?;
+    let calm = find(entries, HARBOUR_50N, design)?.metric("steady_error_rad")?;
+    Some(rolling - calm)
+}
+
+/// The damping factor μ (1/s) and period T (s) fitted on a design's 50°N release.
+fn period_and_decay(entries: &[Entry], design: &str) -> Option<(f64, f64)> {
+    let e = find(entries, HARBOUR_50N, design)?;
+    let t = e.metric("period_s")?;
+    let d = e.metric("log_decrement")?;
+    Some((t, d / t))
+}
+
+/// Beghin §70's back-swing of a design in the Hermione trial, normalised by its own period and
+/// damping: ζ′ T² ε cos L / (8π² μ |δv|/g), 1 for the Slough's formula (magnitude), and the
+/// swing and rate themselves.
+fn backswing(entries: &[Entry], design: &str, k: &Constants) -> Option<(f64, f64, f64, f64, f64)> {
+    let e = find(entries, HERMIONE, design)?;
+    let rate = e.metric("ballistic_backswing_rate_rad_per_s")?;
+    let swing = e.metric("ballistic_swing_rad")?;
+    let (t, mu) = period_and_decay(entries, design)?;
+    let dv = k.hermione_delta_v_m_per_s?;
+    let lat = k.hermione_latitude_rad?;
+    let slough_formula = 8.0 * mu * PI * PI / (t * t * EARTH_RATE_RAD_PER_S * lat.cos()) * dv.abs()
+        / STANDARD_GRAVITY_M_PER_S2;
+    Some((rate, swing, t, mu, rate.abs() / slough_formula))
+}
+
+/// The text's comparative claims checked against the entries. Tolerances are stated in each
+/// claim; a claim whose design is not among the entries is `NotEvaluated`.
+pub fn evaluate(entries: &[Entry], k: &Constants) -> Vec<Claim> {
+    let mut out = Vec::new();
+
+    // 1. Anschütz 1906 rolling ≈ 12° on intercardinal headings, nothing on cardinal ones.
+    let c = claim(
+        "anschutz-rolling-12deg",
+        "Anschütz 1906: rolling 10 s with 0.70 m at the compass gives ≈ 12° on intercardinal headings and nothing on cardinal ones (§40, L1452)",
+        &[ANSCHUTZ_1906],
+        "the magnitude of the error on 045° (net of the calm 50°N equilibrium) within 12° ± 1.5° (the text rounds; its own corrected formula gives 12.7°), and on 000° below 5 % of it",
+    );
+    out.push(
+        match (
+            rolling_net(entries, ROLLING_045, ANSCHUTZ_1906),
+            rolling_net(entries, ROLLING_000, ANSCHUTZ_1906),
+        ) {
+            (Some(i), Some(c0)) => {
+                let mut c = c;
+                let ok = (deg(i.abs()) - 12.0).abs() <= 1.5 && c0.abs() < 0.05 * i.abs();
+                c.measured = format!(
+                    "{:.2}° on 045°, {:.3}° on 000°",
+                    deg(i.abs()),
+                    deg(c0.abs())
+                );
+                c.values.insert("error_045_rad".into(), i);
+                c.values.insert("error_000_rad".into(), c0);
+                c.verdict = verdict(ok);
+                c
+            }
+            _ => missing(
+                c,
+                entries,
+                &[
+                    (ROLLING_045, ANSCHUTZ_1906),
+                    (ROLLING_000, ANSCHUTZ_1906),
+                    (HARBOUR_50N, ANSCHUTZ_1906),
+                ],
+            ),
+        },
+    );
+
+    // 2. Twin-gyro: factor (61) (→ 2/3) of the two gyros on one frame.
+    let c = claim(
+        "twin-rolling-two-thirds",
+        "Sperry twin-gyro 1918: its mean rolling error is the factor (61) — 2/3 when M ≫ x, τ — of the two gyros' on one frame (2IΩ, 3ap), i.e. the West gyro alone as an Anschütz (§58, L2523–2541)",
+        &[TWIN_1918],
+        "measured error on 045° (net of the calm 50°N equilibrium) / the single-frame closed form within 10 % of the factor (61) computed from the design's own numbers",
+    );
+    out.push(
+        match (
+            rolling_net(entries, ROLLING_045, TWIN_1918),
+            k.twin_single_frame_error_rad,
+            k.twin_rolling_factor,
+        ) {
+            (Some(e), Some(single), Some(factor)) => {
+                let mut c = c;
+                let ratio = e.abs() / single;
+                c.measured = format!(
+                    "{:.3}° against a single frame's {:.3}°: ratio {ratio:.3}, factor (61) {factor:.3} (the design does not apply the compensation (54))",
+                    deg(e.abs()),
+                    deg(single)
+                );
+                c.values.insert("error_045_rad".into(), e);
+                c.values.insert("single_frame_error_rad".into(), single);
+                c.values.insert("ratio".into(), ratio);
+                c.values.insert("factor_61".into(), factor);
+                c.verdict = verdict((ratio / factor - 1.0).abs() <= 0.10);
+                c
+            }
+            _ => missing(
+                c,
+                entries,
+                &[(ROLLING_045, TWIN_1918), (HARBOUR_50N, TWIN_1918)],
+            ),
+        },
+    );
+
+    // 3. Sperry: the gyro-ballistic remedy at 12–15 s is insufficient.
+    let c = claim(
+        "sperry-remedy-insufficient",
+        "Sperry 1911: the gyro-ballistic pendulum removes the rolling error only if its period is much longer than the swell's; its 12–15 s \"semble nettement insuffisante\" (§48, L1868)",
+        &[SPERRY_1911],
+        "the measured error on 045° (net of the calm 50°N equilibrium, i.e. of the latitude error) is at least 10 % of the error its pendulum's moment (Ql + ϖb) would give as an Anschütz (the remedy removes less than 90 %)",
+    );
+    out.push(
+        match (
+            rolling_net(entries, ROLLING_045, SPERRY_1911),
+            k.sperry_anschutz_type_error_rad,
+        ) {
+            (Some(e), Some(a)) => {
+                let mut c = c;
+                let share = e.abs() / a;
+                c.measured = format!(
+                    "{:.3}° on 045° against {:.3}° as an Anschütz: {:.0} % remains{}",
+                    deg(e.abs()),
+                    deg(a),
+                    100.0 * share,
+                    match (k.sperry_re_h, k.sperry_pendulum_period_s) {
+                        (Some(h), Some(p)) => format!(
+                            " (pendulum period {p:.1} s: Re H(is) = {h:.3} of (48)'s pendulum term)"
+                        ),
+                        _ => String::new(),
+                    }
+                );
+                c.values.insert("error_045_rad".into(), e);
+                c.values.insert("anschutz_type_error_rad".into(), a);
+                c.values.insert("remaining_share".into(), share);
+                if let Some(h) = k.sperry_re_h {
+                    c.values.insert("re_h".into(), h);
+                }
+                c.verdict = verdict(share >= 0.10);
+                c
+            }
+            _ => missing(
+                c,
+                entries,
+                &[(ROLLING_045, SPERRY_1911), (HARBOUR_50N, SPERRY_1911)],
+            ),
+        },
+    );
+
+    // 4. Three-gyro: "extremely small" in roll.
+    let c = claim(
+        "three-gyro-roll-extremely-small",
+        "Anschütz three-gyro 1912: under rolling its azimuth error is \"extrêmement faible\" (§70, L3131), where the Anschütz 1906 errs ≈ 12°",
+        &[THREE_GYRO_1912],
+        "the magnitude of the error on 045° (net of the calm 50°N equilibrium) below 0.1°, and below a tenth of the Anschütz 1906's when it is in the comparison",
+    );
+    out.push(match rolling_net(entries, ROLLING_045, THREE_GYRO_1912) {
+        Some(e) => {
+            let mut c = c;
+            let a1906 = rolling_net(entries, ROLLING_045, ANSCHUTZ_1906);
+            let others: Vec<String> = entries
+                .iter()
+                .filter(|x| x.scene == ROLLING_045 && x.design != THREE_GYRO_1912)
+                .filter_map(|x| {
+                    let v = rolling_net(entries, ROLLING_045, &x.design)?;
+                    Some(format!("{} {:.3}°", x.design, deg(v.abs())))
+                })
+                .collect();
+            c.measured = format!(
+                "{:.4}° on 045° (the others: {})",
+                deg(e.abs()),
+                if others.is_empty() {
+                    "none".to_string()
+                } else {
+                    others.join(", ")
+                }
+            );
+            c.values.insert("error_045_rad".into(), e);
+            if let Some(a) = a1906 {
+                c.values.insert("anschutz_1906_error_045_rad".into(), a);
+            }
+            c.verdict =
+                verdict(deg(e.abs()) < 0.1 && a1906.is_none_or(|a| e.abs() < 0.1 * a.abs()));
+            c
+        }
+        None => missing(
+            c,
+            entries,
+            &[
+                (ROLLING_045, THREE_GYRO_1912),
+                (HARBOUR_50N, THREE_GYRO_1912),
+            ],
+        ),
+    });
+
+    // 5. The Slough's back-swing, its own formula (needed by 6).
+    let c = claim(
+        "slough-backswing",
+        "Slough, Hermione trial: after a speed change heading North the mercury drives the card back at once, against its deviation, at ζ′ = −8μπ²/(T²ε cos L)·δv/g (§70, L3116–3123)",
+        &[SLOUGH],
+        "back-swing rate (2–8 min after the change) opposite to the swing, its magnitude within 35 % of the formula with T and μ fitted on the Slough's 50°N release",
+    );
+    out.push(match backswing(entries, SLOUGH, k) {
+        Some((rate, swing, t, mu, norm)) => {
+            let mut c = c;
+            c.measured = format!(
+                "swing {:.3}°, then {:.3}°/h ({:.2} × the formula at T = {:.1} min, μ = {:.2e} s⁻¹)",
+                deg(swing),
+                deg(rate) * 3600.0,
+                norm,
+                t / 60.0,
+                mu
+            );
+            c.values.insert("backswing_rate_rad_per_s".into(), rate);
+            c.values.insert("swing_rad".into(), swing);
+            c.values.insert("normalised_backswing".into(), norm);
+            c.verdict = verdict(rate * swing < 0.0 && (norm - 1.0).abs() <= 0.35);
+            c
+        }
+        None => missing(c, entries, &[(HERMIONE, SLOUGH), (HARBOUR_50N, SLOUGH)]),
+    });
+
+    // 6. Three-gyro back-swing twice the Slough's at equal period and damping.
+    let c = claim(
+        "three-gyro-backswing-twice-slough",
+        "Anschütz three-gyro 1912, Hermione trial: its oil drives the card back after a speed change at exactly twice the Slough's rate at equal period and damping (§70, L3123; 2m₂/m₃ ≈ 2.06 by the errata)",
+        &[THREE_GYRO_1912, SLOUGH],
+        "both back-swings opposite to their swings; the ratio of the back-swing rates, each normalised by 8μπ²/(T²ε cos L)·|δv|/g with its own fitted T and μ, within 2.06 ± 25 %",
+    );
+    out.push(
+        match (backswing(entries, THREE_GYRO_1912, k), backswing(entries, SLOUGH, k)) {
+            (Some((r3, s3, _, _, n3)), Some((rs, ss, _, _, ns))) => {
+                let mut c = c;
+                let ratio = n3 / ns;
+                c.measured = format!(
+                    "normalised back-swings {n3:.2} (three-gyro) and {ns:.2} (Slough): ratio {ratio:.2}; raw rates {:.3}°/h and {:.3}°/h (ratio {:.2})",
+                    deg(r3) * 3600.0,
+                    deg(rs) * 3600.0,
+                    r3.abs() / rs.abs()
+                );
+                c.values.insert("normalised_ratio".into(), ratio);
+                c.values.insert("raw_rate_ratio".into(), r3.abs() / rs.abs());
+                c.verdict = verdict(r3 * s3 < 0.0 && rs * ss < 0.0 && (ratio / 2.06 - 1.0).abs() <= 0.25);
+                c
+            }
+            _ => missing(
+                c,
+                entries,
+                &[
+                    (HERMIONE, THREE_GYRO_1912),
+                    (HARBOUR_50N, THREE_GYRO_1912),
+                    (HERMIONE, SLOUGH),
+                    (HARBOUR_50N, SLOUGH),
+                ],
+            ),
+        },
+    );
+
+    // 7. Periods in the trial: the Slough over 85 min …
+    let c = claim(
+        "slough-period-over-85min",
+        "Slough, Hermione trial: \"une période dépassant quatre-vingt-cinq minutes\" (§70, L3123)",
+        &[SLOUGH],
+        "damped period fitted on the 50°N release above 85 min (the text does not give the trial's latitude)",
+    );
+    out.push(match period_and_decay(entries, SLOUGH) {
+        Some((t, _)) => {
+            let mut c = c;
+            c.measured = format!("{:.1} min at 50°N", t / 60.0);
+            c.values.insert("period_s".into(), t);
+            c.verdict = verdict(t > 85.0 * 60.0);
+            c
+        }
+        None => missing(c, entries, &[(HARBOUR_50N, SLOUGH)]),
+    });
+
+    // 8. … and the three-gyro's ≈ 70 min.
+    let c = claim(
+        "three-gyro-period-70min",
+        "Anschütz three-gyro 1912, Hermione trial: \"la période de l'Anschütz était voisine de soixante-dix minutes\" (§70, L3125), shorter than the Slough's",
+        &[THREE_GYRO_1912],
+        "damped period fitted on the 50°N release within 70 min ± 10 %, and shorter than the Slough's when it is in the comparison",
+    );
+    out.push(match period_and_decay(entries, THREE_GYRO_1912) {
+        Some((t, _)) => {
+            let mut c = c;
+            let slough = period_and_decay(entries, SLOUGH).map(|(ts, _)| ts);
+            c.measured = format!(
+                "{:.1} min at 50°N{}",
+                t / 60.0,
+                slough.map_or(String::new(), |s| format!(" (Slough {:.1} min)", s / 60.0))
+            );
+            c.values.insert("period_s".into(), t);
+            c.verdict = verdict((t / 4200.0 - 1.0).abs() <= 0.10 && slough.is_none_or(|s| t < s));
+            c
+        }
+        None => missing(c, entries, &[(HARBOUR_50N, THREE_GYRO_1912)]),
+    });
+    out
+}
+
+/// Timing of the sweep that produced the entries (measured when one invocation ran every run).
+#[derive(Clone, Debug, Default, Serialize, serde::Deserialize)]
+pub struct Timing {
+    /// Wall time of the sweep (every run, on `threads` threads), s.
+    pub sweep_wall_s: f64,
+    pub threads: usize,
+    /// When it was measured (UTC).
+    pub measured_at: String,
+    /// The machine's 1-minute load average when the sweep started (other work sharing the
+    /// cores slows every run), if known.
+    #[serde(default)]
+    pub load_average_at_start: Option<f64>,
+}
+
+/// Where the comparison's time goes: the slowest run, the slowest scene (its designs' runs
+/// summed) and every run's wall time summed, s.
+#[derive(Clone, Debug, Serialize)]
+pub struct Slowest {
+    pub run_scene: String,
+    pub run_design: String,
+    pub run_s: f64,
+    pub scene: String,
+    pub scene_s: f64,
+    pub total_s: f64,
+}
+
+/// The comparison of a sweep folder.
+#[derive(Clone, Debug, Serialize)]
+pub struct Comparison {
+    pub study: String,
+    pub study_file: String,
+    /// Designs and scenes in the study's order.
+    pub designs: Vec<String>,
+    pub scenes: Vec<String>,
+    /// Scene descriptions, by scene.
+    pub scene_descriptions: BTreeMap<String, String>,
+    pub entries: Vec<Entry>,
+    pub constants: Constants,
+    pub claims: Vec<Claim>,
+    pub timing: Option<Timing>,
+}
+
+fn str_col(df: &DataFrame, name: &str) -> Vec<String> {
+    df.column(name)
+        .ok()
+        .and_then(|c| c.cast(&DataType::String).ok())
+        .and_then(|c| {
+            c.str()
+                .ok()
+                .map(|s| s.iter().map(|v| v.unwrap_or("").to_string()).collect())
+        })
+        .unwrap_or_else(|| vec![String::new(); df.height()])
+}
+
+fn f64_col(df: &DataFrame, name: &str) -> Option<Vec<Option<f64>>> {
+    let c = df.column(name).ok()?.cast(&DataType::Float64).ok()?;
+    Some(c.f64().ok()?.iter().collect())
+}
+
+/// The file holding a folder's timing.
+pub fn timing_path(out: &Path) -> PathBuf {
+    out.join("comparison-timing.json")
+}
+
+fn scene_toml(plan: &Plan, index: u64) -> Option<toml::Value> {
+    toml::from_str(&plan.scene_text(&plan.run(index)).ok()?).ok()
+}
+
+/// The design constants the claims need, from the runs' own scenes.
+pub fn constants(plan: &Plan, entries: &[Entry]) -> Constants {
+    let mut k = Constants::default();
+    let scene_of = |scene: &str, design: &str| {
+        let e = entries
+            .iter()
+            .find(|e| e.scene == scene && e.design == design)?;
+        plan.scene(&plan.run(e.run_index))
+            .ok()
+            .map(|s| (s, e.run_index))
+    };
+    // J₀ and sinΔ cosΔ of the standard sea (the 045° scene as the runs read it).
+    let sea = |s: &gyro_sim::Scene, index: u64| {
+        let w = std::f64::consts::TAU / s.program.sea.roll_period_s;
+        let j0 = s.pivot_m[2] * s.program.sea.roll_amplitude_rad.sin() * w * w;
+        let heading = scene_toml(plan, index)
+            .and_then(|v| v.get("start")?.get("heading_deg")?.as_float())
+            .unwrap_or(45.0)
+            .to_radians();
+        (j0, heading)
+    };
+    if let Some((s, i)) = scene_of(ROLLING_045, TWIN_1918)
+        && let Some(th) = TwinGyro::from_design(&s.design, s.start_latitude_rad)
+    {
+        let (j0, h) = sea(&s, i);
+        k.twin_single_frame_error_rad = Some(rolling_error_magnitude_rad(
+            j0,
+            h,
+            th.pendulous_moment + th.east_pendulous_moment,
+            2.0 * th.tau(),
+        ));
+        k.twin_rolling_factor = Some(th.rolling_factor());
+    }
+    if let Some((s, _)) = scene_of(HARBOUR_50N, TWIN_1918)
+        && let Some(th) = TwinGyro::from_design(&s.design, s.start_latitude_rad)
+    {
+        k.twin_periods_50n_s = Some(th.periods());
+    }
+    if let Some((s, i)) = scene_of(ROLLING_045, SPERRY_1911)
+        && let Some(th) = Sperry1911::from_design(&s.design, s.start_latitude_rad)
+    {
+        let (j0, h) = sea(&s, i);
+        k.sperry_anschutz_type_error_rad = Some(rolling_error_magnitude_rad(
+            j0,
+            h,
+            th.bail_moment + th.pendulum_moment,
+            th.tau(),
+        ));
+        // H(iσ) = (k + ik₁σ)/(k − Mσ² + ik₁σ), M = j²ω²/ϖb.
+        let sigma = std::f64::consts::TAU / s.program.sea.roll_period_s;
+        let m = th.small_spin_momentum * th.small_spin_momentum / th.pendulum_moment;
+        let (nr, ni) = (th.spring, th.damper * sigma);
+        let (dr, di) = (th.spring - m * sigma * sigma, th.damper * sigma);
+        k.sperry_re_h = Some((nr * dr + ni * di) / (dr * dr + di * di));
+        k.sperry_pendulum_period_s = s.design.parameter("gyro_ballistic_period_s");
+    }
+    if let Some(e) = entries.iter().find(|e| e.scene == HERMIONE)
+        && let Some(v) = scene_toml(plan, e.run_index)
+    {
+        let before = v
+            .get("start")
+            .and_then(|s| s.get("speed_kn"))
+            .and_then(|x| x.as_float().or(x.as_integer().map(|i| i as f64)));
+        let after = v.get("program").and_then(|p| p.as_array()).and_then(|p| {
+            p.iter()
+                .rev()
+                .find_map(|s| s.get("to_speed_kn")?.as_float())
+        });
+        if let (Some(b), Some(a)) = (before, after) {
+            // Heading North: δv_x is the change of speed.
+            k.hermione_delta_v_m_per_s = Some((a - b) * KNOT_M_PER_S);
+        }
+        k.hermione_latitude_rad = v
+            .get("start")
+            .and_then(|s| s.get("latitude_deg"))
+            .and_then(|x| x.as_float())
+            .map(f64::to_radians);
+    }
+    k
+}
+
+impl Comparison {
+    /// Reads sweep folder `out` (its frozen study and `metrics.parquet`) and checks the claims.
+    pub fn load(out: &Path) -> Result<Comparison, String> {
+        let plan = Plan::load_frozen(out)?;
+        let df = table::read_parquet(&table::metrics_path(out))?;
+        let scenes = str_col(&df, "scene");
+        let designs = str_col(&df, "design");
+        let status = str_col(&df, "status");
+        let reason = str_col(&df, "reason");
+        let recording = str_col(&df, "recording");
+        let index: Vec<u64> = df
+            .column("run_index")
+            .ok()
+            .and_then(|c| {
+                c.u64()
+                    .ok()
+                    .map(|c| c.iter().map(|v| v.unwrap_or(0)).collect())
+            })
+            .ok_or_else(|| "metrics.parquet has no run_index column".to_string())?;
+        let wall = f64_col(&df, "run_wall_time_s").unwrap_or_else(|| vec![None; df.height()]);
+        let metric_cols: Vec<(String, Vec<Option<f64>>)> = crate::study::METRICS
+            .iter()
+            .filter_map(|m| Some((m.to_string(), f64_col(&df, m)?)))
+            .collect();
+        let entries: Vec<Entry> = (0..df.height())
+            .map(|i| Entry {
+                scene: scenes[i].clone(),
+                design: designs[i].clone(),
+                run_index: index[i],
+                status: status[i].clone(),
+                reason: reason[i].clone(),
+                metrics: metric_cols
+                    .iter()
+                    .filter_map(|(m, v)| Some((m.clone(), v[i].filter(|x| x.is_finite())?)))
+                    .collect(),
+                run_wall_time_s: wall[i].unwrap_or(f64::NAN),
+                recording: recording[i].clone(),
+            })
+            .collect();
+        let constants = constants(&plan, &entries);
+        let claims = evaluate(&entries, &constants);
+        let mut design_order: Vec<String> = Vec::new();
+        for d in &designs {
+            if !design_order.contains(d) {
+                design_order.push(d.clone());
+            }
+        }
+        let scene_descriptions = plan
+            .scenes
+            .iter()
+            .map(|s| (s.reference.clone(), gyro_sim::library::describe(&s.text)))
+            .collect();
+        let timing = std::fs::read_to_string(timing_path(out))
+            .ok()
+            .and_then(|t| serde_json::from_str(&t).ok());
+        Ok(Comparison {
+            study: plan.study.name.clone(),
+            study_file: plan.study.file.clone(),
+            designs: design_order,
+            scenes: plan.study.scenes.iter().map(|(s, _)| s.clone()).collect(),
+            scene_descriptions,
+            entries,
+            constants,
+            claims,
+            timing,
+        })
+    }
+
+    /// The value a scene is judged by for a design (rolling errors net of the calm equilibrium).
+    pub fn key_value(&self, scene: &str, design: &str) -> Option<f64> {
+        match key_metric(scene)? {
+            "rolling_error_rad" => rolling_net(&self.entries, scene, design),
+            m => self.entry(scene, design)?.metric(m),
+        }
+    }
+
+    fn entry(&self, scene: &str, design: &str) -> Option<&Entry> {
+        self.entries
+            .iter()
+            .find(|e| e.scene == scene && e.design == design)
+    }
+
+    /// The slowest run and the slowest scene (its designs' runs summed), with the sum of every
+    /// run's wall time.
+    pub fn slowest(&self) -> Option<Slowest> {
+        let run = self
+            .entries
+            .iter()
+            .filter(|e| e.run_wall_time_s.is_finite())
+            .max_by(|a, b| a.run_wall_time_s.total_cmp(&b.run_wall_time_s))?;
+        let mut per_scene: BTreeMap<&str, f64> = BTreeMap::new();
+        for e in self
+            .entries
+            .iter()
+            .filter(|e| e.run_wall_time_s.is_finite())
+        {
+            *per_scene.entry(e.scene.as_str()).or_default() += e.run_wall_time_s;
+        }
+        let (scene, s) = per_scene
+            .iter()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map(|(k, v)| (k.to_string(), *v))?;
+        Some(Slowest {
+            run_scene: run.scene.clone(),
+            run_design: run.design.clone(),
+            run_s: run.run_wall_time_s,
+            scene,
+            scene_s: s,
+            total_s: per_scene.values().sum(),
+        })
+    }
+
+    /// The Markdown report; `plots` are the figures' paths relative to the report.
+    pub fn render(&self, command: &str, plots: &[(String, String)]) -> String {
+        let mut s = String::new();
+        let f = |v: Option<f64>, scale: f64, digits: usize| {
+            v.map_or("—".to_string(), |x| format!("{:.*}", digits, x * scale))
+        };
+        s.push_str("# The compasses compared\n\n");
+        s.push_str(
+            "Beghin's thesis (1922) is a comparison: which compass errs least, where, and why. This report runs every \
+compass of the study on one standard set of scenes and checks the text's own comparative claims against \
+the fitted metrics. It is generated: do not edit it by hand, regenerate it with\n\n",
+        );
+        s.push_str(&format!("```sh\n{command}\n```\n\n"));
+        s.push_str(&format!(
+            "(study `{}`; add a design to its `designs` list — one line — and run the command again with `--fresh`).\n\n",
+            self.study_file
+        ));
+        s.push_str(&format!(
+            "**Designs** ({}): {}. The issue speaks of \"all six designs\": Foucault's gyroscope is not a compass (it does not \
+settle) and is left out, so the text's compasses are five — the Anschütz 1906, the Sperry 1911, the Slough, the \
+Sperry twin-gyro 1918 and the Anschütz three-gyro 1912 — and the sixth column is any design of your own added to \
+the list.{}\n\n",
+            self.designs.len(),
+            self.designs
+                .iter()
+                .map(|d| format!("`{d}`"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            if self.designs.iter().any(|d| d == THREE_GYRO_1912) {
+                ""
+            } else {
+                " The three-gyro is not in this run's list (its design is not written yet): its claims are marked *not evaluated*."
+            }
+        ));
+        s.push_str("**Scenes** (each design's latitude dial set to the scene's latitude, the release offset on the design's azimuth coordinate):\n\n");
+        s.push_str("| scene | what happens |\n|---|---|\n");
+        for sc in &self.scenes {
+            s.push_str(&format!(
+                "| `{sc}` | {} |\n",
+                self.scene_descriptions
+                    .get(sc)
+                    .map(String::as_str)
+                    .unwrap_or("")
+                    .trim_start_matches("Standard scene: ")
+            ));
+        }
+
+        // Verdict.
+        s.push_str("\n## Verdict: the text's comparative claims\n\n");
+        let count = |v: Verdict| self.claims.iter().filter(|c| c.verdict == v).count();
+        s.push_str(&format!(
+            "{} reproduced, {} not reproduced, {} not evaluated (the verdict's logic, and the claims the shipped designs reproduce, are tested in `crates/gyro-study/tests/comparison.rs`).\n\n",
+            count(Verdict::Reproduced),
+            count(Verdict::NotReproduced),
+            count(Verdict::NotEvaluated)
+        ));
+        s.push_str("| claim (Beghin) | tolerance | measured | verdict |\n|---|---|---|---|\n");
+        for c in &self.claims {
+            let cell = |x: &str| x.replace('|', "\\|");
+            s.push_str(&format!(
+                "| {} | {} | {} | **{}** |\n",
+                cell(c.claim),
+                cell(c.tolerance),
+                cell(&c.measured),
+                c.verdict
+            ));
+        }
+        s.push_str(&self.summary());
+
+        // Tables.
+        s.push_str("\n## Fitted metrics, design × scene\n\n");
+        s.push_str(
+            "Angles in degrees, periods in minutes. *period*, *decrement*: the damped sinusoid fitted from the start to the first \
+manoeuvre; *steady*: the settled error after the last manoeuvre; *ballistic peak*: the largest deviation from the new \
+equilibrium within one period of a manoeuvre's end; *swing* and *back-swing*: how far the card has swung from its old \
+equilibrium 2 min after the end and its rate over the next 6 min (§70); *rolling*: the rectified mean error under \
+the sea, and *rolling − calm* the same net of the design's settled reading on `compare-harbour-50n` (same latitude and \
+dial: the Sperry's and the Slough's latitude error is not a rolling error); *run s*: wall time of the run (simulate, record, analyse).\n\n",
+        );
+        for sc in &self.scenes {
+            s.push_str(&format!("### `{sc}`\n\n"));
+            s.push_str("| design | period min | decrement | steady ° | ballistic peak ° | swing ° | back-swing °/h | rolling ° | rolling − calm ° | run s |\n|---|---|---|---|---|---|---|---|---|---|\n");
+            for d in &self.designs {
+                let Some(e) = self.entry(sc, d) else {
+                    continue;
+                };
+                if e.status != OK {
+                    s.push_str(&format!("| `{d}` | failed: {} ||||||||| \n", e.reason));
+                    continue;
+                }
+                let r = 180.0 / PI;
+                s.push_str(&format!(
+                    "| `{d}` | {} | {} | {} | {} | {} | {} | {} | {} | {:.1} |\n",
+                    f(e.metric("period_s"), 1.0 / 60.0, 1),
+                    f(e.metric("log_decrement"), 1.0, 2),
+                    f(e.metric("steady_error_rad"), r, 3),
+                    f(e.metric("ballistic_peak_rad"), r, 3),
+                    f(e.metric("ballistic_swing_rad"), r, 3),
+                    f(
+                        e.metric("ballistic_backswing_rate_rad_per_s"),
+                        r * 3600.0,
+                        3
+                    ),
+                    f(e.metric("rolling_error_rad"), r, 3),
+                    f(
+                        e.metric("rolling_error_rad")
+                            .and(rolling_net(&self.entries, sc, d)),
+                        r,
+                        3
+                    ),
+                    e.run_wall_time_s
+                ));
+            }
+            if let Some((_, file)) = plots.iter().find(|(k, _)| k == sc) {
+                s.push_str(&format!(
+                    "\n![{sc}: reading error, design against design]({file})\n\n"
+                ));
+            } else {
+                s.push('\n');
+            }
+        }
+        if let Some((_, file)) = plots.iter().find(|(k, _)| k == "scorecard") {
+            s.insert_str(
+                s.find("\n## Fitted metrics").unwrap_or(s.len()),
+                &format!("\n![Who errs least where: the key error of each scene, design against design]({file})\n"),
+            );
+        }
+
+        s.push_str(LIMITS);
+
+        // Cost.
+        s.push_str("## What the comparison costs\n\n");
+        if let Some(Slowest {
+            run_scene: rs,
+            run_design: rd,
+            run_s: rt,
+            scene: ss,
+            scene_s: st,
+            total_s: total,
+        }) = self.slowest()
+        {
+            match &self.timing {
+                Some(t) => s.push_str(&format!(
+                    "The whole sweep ({} runs) took **{:.1} s** of wall time on {} thread(s) ({}{}); its runs took {:.1} s in all (simulate, record, analyse). \
+The slowest scene, `{ss}`, took {st:.1} s over its designs ({:.0} % of the runs' time; {:.0} % of the wall time were it run alone on one core); \
+the slowest run, `{rd}` on `{rs}`, {rt:.1} s ({:.0} % of the wall time).\n\n",
+                    self.entries.len(),
+                    t.sweep_wall_s,
+                    t.threads,
+                    t.measured_at,
+                    t.load_average_at_start.map_or(String::new(), |l| format!(
+                        ", load average {l:.2} when it started"
+                    )),
+                    total,
+                    100.0 * st / total,
+                    100.0 * st / t.sweep_wall_s,
+                    100.0 * rt / t.sweep_wall_s,
+                )),
+                None => s.push_str(&format!(
+                    "The runs took {total:.1} s in all; the slowest scene, `{ss}`, {st:.1} s ({:.0} %); the slowest run, `{rd}` on `{rs}`, {rt:.1} s \
+(the sweep's wall time was not measured: it was resumed, not run whole).\n\n",
+                    100.0 * st / total
+                )),
+            }
+        }
+        s
+    }
+
+    /// Who errs least where: for each scene, the design with the smallest key error.
+    fn summary(&self) -> String {
+        let mut notes: Vec<String> = Vec::new();
+        let mut s = String::from(
+            "\n**Who errs least where** (the smallest key error per scene; the speed error of `compare-run-north-30kn` is the \
+same for every compass and is not ranked):\n\n| scene | key error | least | most |\n|---|---|---|---|\n",
+        );
+        for sc in &self.scenes {
+            let Some(metric) = key_metric(sc) else {
+                continue;
+            };
+            let mut v: Vec<(&str, f64)> = self
+                .designs
+                .iter()
+                .filter_map(|d| Some((d.as_str(), self.key_value(sc, d)?.abs())))
+                .collect();
+            if v.len() < 2 {
+                continue;
+            }
+            v.sort_by(|a, b| a.1.total_cmp(&b.1));
+            if sc.contains("zigzag")
+                && let Some([_, short]) = self.constants.twin_periods_50n_s
+                && let Some(twin) = v.iter().find(|(d, _)| *d == TWIN_1918)
+            {
+                notes.push(format!(
+                    "On `{sc}` the twin-gyro's peak ({:.1}°) stands beside its short mode's period, {:.1} min at 50°N (the quartic's), \
+against the zig-zag's cycle of two 10-min legs, 20 min: the text warns of such resonances (and of \"an Anschütz-size following error\" \
+under oblique accelerations, §58); no test pins the cause down.",
+                    deg(twin.1),
+                    short / 60.0
+                ));
+            }
+            let (lo, hi) = (v[0], v[v.len() - 1]);
+            s.push_str(&format!(
+                "| `{sc}` | {} | `{}` {:.3}° | `{}` {:.3}° |\n",
+                if metric == "rolling_error_rad" {
+                    "rolling error − calm equilibrium"
+                } else {
+                    metric
+                },
+                lo.0,
+                deg(lo.1),
+                hi.0,
+                deg(hi.1)
+            ));
+        }
+        for n in notes {
+            s.push_str(&format!("\n{n}\n"));
+        }
+        s
+    }
+}
+
+/// What the comparison does not settle, whatever its numbers.
+const LIMITS: &str = "## Limits of this comparison\n\n\
+- The text gives neither the Hermione trial's latitude nor its deceleration: 50°N and 60 s are the scene's choice, and the \
+trial's periods (Slough > 85 min, three-gyro ≈ 70 min) are compared with the periods fitted on the 50°N release.\n\
+- The back-swing is the card's mean rate 2–8 min after the speed change (a fixed window, short against every compass's \
+period): the text's ζ′ at the end of the perturbation, once the Slough's 30-s mercury has followed.\n\
+- Rolling errors are taken net of each design's settled reading on `compare-harbour-50n` (same latitude, same dial); the \
+Anschütz 1906 is compensated at 50°N, the others carry their own latitude errors.\n\
+- The rolling scenes integrate with DOP853 (rtol 1e-7, atol 1e-6) like the shipped rolling scenes; a study sets one \
+integrator per scene, not per design, so a design with very stiff parts (a many-compartment tank) runs explicit there.\n\
+- The twin-gyro as shipped does not apply the compensation (54) that the factor (61) assumes; (61) is computed from \
+the design's own x = kl², y = M and τ, and reaches 2/3 only for M ≫ x, τ.\n\
+- *Who errs least where* ranks by one key error per scene; the per-scene tables are the evidence.\n\n";
+
+/// The error a scene is judged by (None: not ranked).
+pub fn key_metric(scene: &str) -> Option<&'static str> {
+    if scene.contains("rolling-045") {
+        Some("rolling_error_rad")
+    } else if scene.contains("harbour") {
+        Some("steady_error_rad")
+    } else if scene.contains("run-north") || scene.contains("rolling-000") {
+        None
+    } else {
+        Some("ballistic_peak_rad")
+    }
+}
+
+/// Decimates (t, x) to at most `n` points (every k-th).
+fn thin(t: &[f64], x: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
+    let k = t.len().div_ceil(n.max(1)).max(1);
+    (
+        t.iter().step_by(k).copied().collect(),
+        x.iter().step_by(k).copied().collect(),
+    )
+}
+
+/// Writes the figures into `dir`: one per scene (reading error against time, one line per
+/// design, from the kept recordings of sweep folder `out`) and the scorecard (the key error of
+/// each scene per design, log scale). Returns (scene or "scorecard", file name).
+pub fn write_plots(
+    c: &Comparison,
+    out: &Path,
+    dir: &Path,
+) -> Result<Vec<(String, String)>, String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut written = Vec::new();
+    for sc in &c.scenes {
+        let mut fig = Figure::new(
+            &format!("{sc}: reading error"),
+            "time (h)",
+            "reading error (°)",
+        );
+        fig.width_px = 900;
+        fig.height_px = 420;
+        for (k, d) in c.designs.iter().enumerate() {
+            let Some(e) = c.entry(sc, d).filter(|e| !e.recording.is_empty()) else {
+                continue;
+            };
+            let a = gyro_analysis::analyze_run(&out.join(&e.recording), &Default::default())
+                .map_err(|err| format!("{}: {err}", e.recording))?;
+            let (t, x) = thin(&a.series.time_s, &a.series.error_rad, 600);
+            fig.series.push(Series {
+                name: d.clone(),
+                x: t.iter().map(|v| v / 3600.0).collect(),
+                y: x.iter().map(|v| v.to_degrees()).collect(),
+                color: PALETTE[k % PALETTE.len()],
+                dashed: false,
+                width_px: 1.5,
+            });
+        }
+        if fig.series.is_empty() {
+            continue;
+        }
+        let name = format!("{sc}.svg");
+        table::write_atomically(&dir.join(&name), fig.to_svg().as_bytes())?;
+        written.push((sc.clone(), name));
+    }
+    let svg = scorecard_svg(c);
+    table::write_atomically(&dir.join("scorecard.svg"), svg.as_bytes())?;
+    written.push(("scorecard".into(), "scorecard.svg".into()));
+    Ok(written)
+}
+
+/// Grouped horizontal bars: for each ranked scene, |key error| per design in degrees, on a log
+/// axis from 10⁻³° to 10²°.
+fn scorecard_svg(c: &Comparison) -> String {
+    let scenes: Vec<(&str, &str)> = c
+        .scenes
+        .iter()
+        .filter_map(|s| Some((s.as_str(), key_metric(s)?)))
+        .collect();
+    let nd = c.designs.len().max(1);
+    let (left, top, bar, gap, width) = (230.0, 50.0, 11.0, 14.0, 520.0);
+    // Room for the value labels past the longest bar.
+    let w_extra = 80.0;
+    let group = bar * nd as f64 + gap;
+    let h = top + group * scenes.len() as f64 + 40.0 + 18.0 * nd as f64;
+    let w = left + width + w_extra;
+    let (lo, hi) = (-3.0f64, 2.0f64);
+    let xof = |deg: f64| left + width * ((deg.max(1e-3).log10() - lo) / (hi - lo)).clamp(0.0, 1.0);
+    let mut s = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w:.0}\" height=\"{h:.0}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n<text x=\"{left}\" y=\"22\" font-size=\"15\">Key error of each scene, design against design (|°|, log scale)</text>\n"
+    );
+    for p in (lo as i32)..=(hi as i32) {
+        let x = xof(10f64.powi(p));
+        s.push_str(&format!(
+            "<line x1=\"{x:.1}\" y1=\"{top}\" x2=\"{x:.1}\" y2=\"{:.1}\" stroke=\"#ddd\"/>\n<text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{}</text>\n",
+            top + group * scenes.len() as f64,
+            top - 6.0,
+            10f64.powi(p)
+        ));
+    }
+    for (i, (sc, m)) in scenes.iter().enumerate() {
+        let y0 = top + group * i as f64;
+        s.push_str(&format!(
+            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{} ({})</text>\n",
+            left - 6.0,
+            y0 + bar * nd as f64 / 2.0 + 4.0,
+            sc.trim_start_matches("compare-"),
+            m.trim_end_matches("_rad").replace('_', " ")
+        ));
+        for (k, d) in c.designs.iter().enumerate() {
+            let Some(v) = c.key_value(sc, d) else {
+                continue;
+            };
+            let [r, g, b] = PALETTE[k % PALETTE.len()];
+            let x1 = xof(deg(v.abs()));
+            s.push_str(&format!(
+                "<rect x=\"{left}\" y=\"{:.1}\" width=\"{:.1}\" height=\"{:.1}\" fill=\"rgb({r},{g},{b})\"><title>{d}: {:.4}°</title></rect>\n<text x=\"{:.1}\" y=\"{:.1}\" font-size=\"9\">{:.3}°</text>\n",
+                y0 + bar * k as f64,
+                (x1 - left).max(0.5),
+                bar - 1.0,
+                deg(v.abs()),
+                x1.max(left + 0.5) + 3.0,
+                y0 + bar * k as f64 + bar - 2.5,
+                deg(v.abs())
+            ));
+        }
+    }
+    let ly = top + group * scenes.len() as f64 + 24.0;
+    for (k, d) in c.designs.iter().enumerate() {
+        let [r, g, b] = PALETTE[k % PALETTE.len()];
+        let y = ly + 18.0 * k as f64;
+        s.push_str(&format!(
+            "<rect x=\"{left}\" y=\"{:.1}\" width=\"12\" height=\"12\" fill=\"rgb({r},{g},{b})\"/><text x=\"{:.1}\" y=\"{:.1}\">{d}</text>\n",
+            y - 10.0,
+            left + 18.0,
+            y
+        ));
+    }
+    s.push_str("</svg>\n");
+    s
+}
