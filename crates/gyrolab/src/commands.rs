@@ -260,6 +260,8 @@ pub fn demo(out: &Path, json: bool) -> Result<ExitCode, CliError> {
         "slough-speed-change-20kn",
         "twin-harbour-35n",
         "twin-speed-change-20kn",
+        "three-gyro-harbour-35n",
+        "three-gyro-speed-change-20kn",
     ];
     let mut rows = Vec::new();
     let mut lines = Table::new(&[
@@ -493,7 +495,7 @@ pub fn compare(
 
 /// The baseline scene set: small and fast, covering settling, speed error, a speed change and
 /// the exact Foucault reference, for every compass that has them.
-pub const REGRESS_SCENES: [&str; 10] = [
+pub const REGRESS_SCENES: [&str; 12] = [
     "foucault-azimuth-45n",
     "harbour-50n",
     "run-north-30kn",
@@ -504,6 +506,8 @@ pub const REGRESS_SCENES: [&str; 10] = [
     "slough-speed-change-20kn",
     "twin-harbour-35n",
     "twin-speed-change-20kn",
+    "three-gyro-harbour-35n",
+    "three-gyro-speed-change-20kn",
 ];
 
 pub fn regress(
