@@ -3,6 +3,10 @@
 //! equations the accuracy study and the Python peer use (Villarceau eq. 44 bis, Beghin's 4-state
 //! linear Anschütz), to show what the engine's generality costs per evaluation.
 //!
+//! The compasses of chs. IV–VI at their 35°N harbour scenes, and the three-gyro again with its
+//! tank's valves closed: the difference is the oil tank's share (its seven levels and the
+//! liquid's terms).
+//!
 //! `cargo bench -p gyro-sim --bench rhs`
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -12,24 +16,40 @@ use gyro_sim::solvers::OdeSystem;
 use gyro_sim::{Scene, SceneOverrides, Simulation};
 use std::hint::black_box;
 
-fn scene(name: &str, fidelity: Fidelity) -> Option<Scene> {
+/// A shipped scene at `fidelity`, with `compass_lines` added to its `[compass]` table.
+fn scene(name: &str, fidelity: Fidelity, compass_lines: &str) -> Option<Scene> {
     let ov = SceneOverrides {
         fidelity: Some(fidelity),
         ..Default::default()
     };
-    Scene::load(name, &ov).ok()
+    let text = gyro_sim::library::SCENES
+        .iter()
+        .find(|(n, _)| *n == name)?
+        .1
+        .replace("[compass]\n", &format!("[compass]\n{compass_lines}\n"));
+    Scene::from_toml(name, &text, None, &ov).ok()
 }
 
 fn bench_rhs(c: &mut Criterion) {
     let mut group = c.benchmark_group("rhs");
-    for (scene_name, label) in [
-        ("foucault-azimuth-45n", "foucault"),
-        ("harbour-50n", "anschutz-1906"),
-        ("run-north-30kn", "anschutz-1906-under-way"),
-        ("rolling-intercardinal", "anschutz-1906-rolling"),
+    let closed = "design_overrides = { \"tank.oil.valves\" = \"closed\" }";
+    for (scene_name, label, lines) in [
+        ("foucault-azimuth-45n", "foucault", ""),
+        ("harbour-50n", "anschutz-1906", ""),
+        ("run-north-30kn", "anschutz-1906-under-way", ""),
+        ("rolling-intercardinal", "anschutz-1906-rolling", ""),
+        ("sperry-harbour-35n", "sperry-1911", ""),
+        ("slough-harbour-35n", "slough", ""),
+        ("twin-harbour-35n", "sperry-twin-1918", ""),
+        ("three-gyro-harbour-35n", "anschutz-three-gyro-1912", ""),
+        (
+            "three-gyro-harbour-35n",
+            "anschutz-three-gyro-1912-valves-closed",
+            closed,
+        ),
     ] {
         for fidelity in [Fidelity::Full, Fidelity::Gyroscopic, Fidelity::Linear] {
-            let Some(sc) = scene(scene_name, fidelity) else {
+            let Some(sc) = scene(scene_name, fidelity, lines) else {
                 continue;
             };
             let Ok(sim) = Simulation::new(&sc) else {
