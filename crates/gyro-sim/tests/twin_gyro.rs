@@ -455,7 +455,7 @@ fn slow_growth(m: &CompiledModel<Moored>) -> f64 {
 /// and the parabola P, (2y + x − τ)² = 8τ(y + 2x − τ), bound the region: 5 % of M on their
 /// stable side the linearisation's slow modes stay on the imaginary axis (|Re| < 1e-6 /s), 5 %
 /// on the other side one grows (> 1e-5 /s): a real root across D, a complex pair in u² inside P.
-/// (The line Δ, 2y + x − τ = 0, lies inside P wherever D holds: it bounds nothing on its own.)
+/// (The line Δ, 2y + x − τ = 0, is never crossed on the stable region's edge: its own test is below.)
 #[test]
 fn line_d_and_parabola_p_bound_the_undamped_compass_by_its_modes() {
     let lat = 0.0;
@@ -482,6 +482,54 @@ fn line_d_and_parabola_p_bound_the_undamped_compass_by_its_modes() {
             } else {
                 assert!(growth > 1e-5, "{name}, {factor}: {growth:e}");
             }
+        }
+    }
+}
+
+/// The line Δ, 2y + x − τ = 0, is the third condition of §57: below it, in the sliver that lies
+/// above D and outside P (y + 2x − τ < (2y + x − τ)²/(8τ)), both roots in u² are real and
+/// positive, so the undamped compass (c = 0) has real roots of both signs and diverges without
+/// oscillating; the same spring with the wire raised above Δ (and D, outside P) is stable again.
+/// (Δ is never crossed on the stable region's edge: at Δ = 0, P asks for y + 2x − τ < 0.)
+#[test]
+fn below_line_delta_the_undamped_compass_diverges_without_oscillating() {
+    let lat = 0.0;
+    let base = allowing(lat, &[("spring_depth_m", 0.0)]);
+    let th = TwinGyro::from_design(&base, 0.0).expect("twin");
+    let (l, t) = (th.half_spacing, th.tau());
+    for (x, y, stable) in [(0.45 * t, 0.105 * t, false), (0.45 * t, 4.0 * t, true)] {
+        let (d, delta) = (y + 2.0 * x - t, 2.0 * y + x - t);
+        let outside_p = delta * delta > 8.0 * t * d;
+        assert!(d > 0.0 && outside_p, "above D and outside P");
+        assert_eq!(delta > 0.0, stable, "the side of Δ");
+        let ov = [
+            ("spring_depth_m", 0.0),
+            ("spring_rate_n_per_m", x / (l * l)),
+            ("wire_stiffness_n_m_per_rad", y),
+        ];
+        let m = compile(allowing(lat, &ov), lat);
+        let slow: Vec<(f64, f64)> = m
+            .modes()
+            .into_iter()
+            .filter(|r| r.0.hypot(r.1) < 1e-2)
+            .collect();
+        let growth = slow.iter().map(|r| r.0).fold(f64::NEG_INFINITY, f64::max);
+        println!(
+            "x = {:.3}τ, y = {:.3}τ (Δ {:+.3}τ): slow modes {slow:?}",
+            x / t,
+            y / t,
+            delta / t
+        );
+        if stable {
+            assert!(growth.abs() < 1e-6, "above Δ: {growth:e}");
+        } else {
+            // Two growing real roots (u² > 0 twice), and no oscillation among the growing ones.
+            let growing: Vec<&(f64, f64)> = slow.iter().filter(|r| r.0 > 1e-5).collect();
+            assert_eq!(growing.len(), 2, "below Δ: {slow:?}");
+            assert!(
+                growing.iter().all(|r| r.1.abs() < 1e-9 * r.0),
+                "real: {slow:?}"
+            );
         }
     }
 }
