@@ -333,6 +333,9 @@ pub mod bodies_record {
     /// A liquid tank the body carries: `<body>.tank.<name>`, a [`super::TankDrawing`]'s
     /// [`super::TankDrawing::metadata_value`].
     pub const TANK: &str = "tank";
+    /// A spring from the body to another: `<body>.spring.<name>`, a [`super::SpringDrawing`]'s
+    /// [`super::SpringDrawing::metadata_value`].
+    pub const SPRING: &str = "spring";
 
     /// The key of one body's entry: `<body>.<what>`.
     pub fn key(body: &str, what: &str) -> String {
@@ -342,6 +345,11 @@ pub mod bodies_record {
     /// The key of the pots `name` carried by `body`: `<body>.pots.<name>`.
     pub fn pots_key(body: &str, name: &str) -> String {
         format!("{body}.{POTS}.{name}")
+    }
+
+    /// The key of the spring `name` attached to `body`: `<body>.spring.<name>`.
+    pub fn spring_key(body: &str, name: &str) -> String {
+        format!("{body}.{SPRING}.{name}")
     }
 
     /// The key of the tank `name` carried by `body`: `<body>.tank.<name>`.
@@ -488,6 +496,29 @@ impl PotsDrawing {
             self.radius_m,
             self.rest_level_m,
             path.join(", ")
+        )
+    }
+}
+
+/// A spring between two bodies (the twin-gyro's HH′), as the viewer draws it: a line from
+/// `point_m` in the body whose key holds it to `other_point_m` in `other_body` (each in its
+/// body's frame).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpringDrawing {
+    pub other_body: String,
+    pub point_m: [f64; 3],
+    pub other_point_m: [f64; 3],
+}
+
+impl SpringDrawing {
+    /// A TOML inline table with the struct's field names as keys.
+    pub fn metadata_value(&self) -> String {
+        let v = |p: &[f64; 3]| format!("[{:?}, {:?}, {:?}]", p[0], p[1], p[2]);
+        format!(
+            "{{ other_body = \"{}\", point_m = {}, other_point_m = {} }}",
+            self.other_body,
+            v(&self.point_m),
+            v(&self.other_point_m)
         )
     }
 }

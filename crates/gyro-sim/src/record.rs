@@ -8,9 +8,9 @@ use crate::run::{ManoeuvreEvent, Progress, RunError, RunObserver, RunProbe, RunS
 use crate::scene::Scene;
 use crate::solvers::StopReason;
 use gyro_mcap::contract::{
-    BodyShape, PotsDrawing, TankCompartmentDrawing, TankDrawing, attachments, bodies_record,
-    compass_state, design_constants_record, design_record, energy, events, result_record,
-    run_record, scene_record, ship_state, solver_stats, status, tf,
+    BodyShape, PotsDrawing, SpringDrawing, TankCompartmentDrawing, TankDrawing, attachments,
+    bodies_record, compass_state, design_constants_record, design_record, energy, events,
+    result_record, run_record, scene_record, ship_state, solver_stats, status, tf,
 };
 use gyro_mcap::{ChannelId, Pose, RecordingError, RecordingWriter, Value, WriterOptions};
 use gyro_model::constants::{EARTH_RADIUS_M, schuler_period_s};
@@ -609,6 +609,25 @@ fn bodies_metadata(model: &CompiledModel<ShipProgram>) -> BTreeMap<String, Strin
             bodies_record::pots_key(&model.design.bodies[p.body].name, &p.name),
             drawing.metadata_value(),
         );
+    }
+    for f in &model.design.forces {
+        if let gyro_model::Force::LinkSpring {
+            name,
+            bodies,
+            points,
+            ..
+        } = f
+        {
+            let drawing = SpringDrawing {
+                other_body: model.design.bodies[bodies[1]].name.clone(),
+                point_m: points[0],
+                other_point_m: points[1],
+            };
+            m.insert(
+                bodies_record::spring_key(&model.design.bodies[bodies[0]].name, name),
+                drawing.metadata_value(),
+            );
+        }
     }
     for t in &model.design.tanks {
         let fields: Vec<String> = t

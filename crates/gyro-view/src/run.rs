@@ -52,6 +52,37 @@ pub(crate) struct BodyInfo {
     pub pots: Vec<(String, PotsInfo)>,
     /// Liquid tanks the body carries, by name.
     pub tanks: Vec<(String, TankInfo)>,
+    /// Springs from this body to others, by name.
+    pub springs: Vec<(String, SpringInfo)>,
+}
+
+/// A spring between two bodies as recorded (`gyro_mcap::contract::SpringDrawing`).
+#[derive(Debug, Clone, Deserialize)]
+pub(crate) struct SpringInfo {
+    pub other_body: String,
+    pub point_m: [f64; 3],
+    pub other_point_m: [f64; 3],
+}
+
+#[derive(Deserialize)]
+struct SpringHolder {
+    spring: SpringInfo,
+}
+
+/// Parses a `<body>.spring.<name>` metadata value.
+pub(crate) fn parse_spring(text: &str) -> Result<SpringInfo, String> {
+    let s = toml::from_str::<SpringHolder>(&format!("spring = {text}"))
+        .map(|h| h.spring)
+        .map_err(|e| e.message().to_owned())?;
+    if !s
+        .point_m
+        .iter()
+        .chain(&s.other_point_m)
+        .all(|x| x.is_finite())
+    {
+        return Err("a spring needs finite attachment points".into());
+    }
+    Ok(s)
 }
 
 /// A liquid tank as recorded (`gyro_mcap::contract::TankDrawing`, carrier's frame).
@@ -361,10 +392,22 @@ fn bodies(
                     rotor,
                     pots: Vec::new(),
                     tanks: Vec::new(),
+                    springs: Vec::new(),
                 },
             );
         }
         for (key, value) in entries {
+            if let Some((body, name)) = key.split_once(&format!(".{}.", bodies_record::SPRING)) {
+                let spring = parse_spring(value).map_err(|detail| ViewError::Metadata {
+                    path: path.to_path_buf(),
+                    key: format!("{}/{key}", bodies_record::NAME),
+                    detail,
+                })?;
+                if let Some(b) = out.get_mut(body) {
+                    b.springs.push((name.to_owned(), spring));
+                }
+                continue;
+            }
             if let Some((body, name)) = key.split_once(&format!(".{}.", bodies_record::TANK)) {
                 let tank = parse_tank(value).map_err(|detail| ViewError::Metadata {
                     path: path.to_path_buf(),

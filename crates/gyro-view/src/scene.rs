@@ -419,6 +419,79 @@ fn log_tank(
     Ok(())
 }
 
+/// Springs between bodies, at `<earth>/springs/<name>`: a line between the two attachment points
+/// at every pose shown, each point carried to the earth frame through its body's shown poses
+/// (so a tilt exaggeration moves the line with the bodies).
+fn log_springs(
+    rec: &RecordingStream,
+    run: &RunData,
+    shown: &[Shown],
+    earth: &str,
+    scale_m: f64,
+) -> Result<(), ViewError> {
+    let index: BTreeMap<&str, usize> = run
+        .tracks
+        .iter()
+        .enumerate()
+        .map(|(i, (name, _))| (name.as_str(), i))
+        .collect();
+    // A body-frame point in the earth frame at time t; frames without a track hang from it.
+    let in_earth = |body: &str, t: i64, p: [f64; 3]| -> Option<[f64; 3]> {
+        let (mut name, mut x) = (body, p);
+        for _ in 0..64 {
+            let Some(&i) = index.get(name) else {
+                return Some(x);
+            };
+            let s = &shown[i];
+            if s.time_ns.is_empty() {
+                return None;
+            }
+            let k = at_or_before(&s.time_ns, t);
+            let q = s.rotation[k].xyzw().map(f64::from);
+            let r = math::rotate(q, x);
+            let tr = s.translation[k];
+            x = [0, 1, 2].map(|j| r[j] + f64::from(tr[j]));
+            name = run.tracks[i].1.parent.as_str();
+        }
+        None
+    };
+    for (body, info) in &run.bodies {
+        for (name, spring) in &info.springs {
+            let Some(&i) = index.get(body.as_str()) else {
+                continue;
+            };
+            let times = shown[i].time_ns.clone();
+            let strips: Option<Vec<Vec<[f32; 3]>>> = times
+                .iter()
+                .map(|&t| {
+                    let a = in_earth(body, t, spring.point_m)?;
+                    let b = in_earth(&spring.other_body, t, spring.other_point_m)?;
+                    Some(vec![f32x3(a), f32x3(b)])
+                })
+                .collect();
+            let Some(strips) = strips else {
+                continue;
+            };
+            let entity = format!("{earth}/springs/{}", crate::run::entity_name(name));
+            rec.send_columns(
+                entity.as_str(),
+                [sim_time(times)],
+                LineStrips3D::update_fields()
+                    .with_strips(strips)
+                    .columns_of_unit_batches()?,
+            )?;
+            rec.log_static(
+                entity,
+                &LineStrips3D::update_fields()
+                    .with_colors([Color::from_rgb(200, 170, 60)])
+                    .with_radii([(0.004 * scale_m) as f32])
+                    .with_labels([name.as_str()]),
+            )?;
+        }
+    }
+    Ok(())
+}
+
 /// Frame name → entity path, and frame name → depth below the earth frame.
 type FramePaths = (BTreeMap<String, String>, BTreeMap<String, usize>);
 
@@ -611,6 +684,7 @@ pub(crate) fn log_scene(
             .with_labels(["ship (schematic, not to scale)"]),
         )?;
     }
+    log_springs(rec, run, &shown, &earth, scale)?;
     log_overlays(rec, run, run_index, root, opts, 2.2 * scale)?;
     let mut bodies: Vec<String> = run.tracks.iter().map(|(n, _)| n.clone()).collect();
     bodies.sort();

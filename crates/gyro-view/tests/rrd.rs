@@ -476,6 +476,76 @@ fn the_default_fit_is_the_analysis_crates_and_is_drawn_over_the_data() {
     assert!(worst < 1e-6, "fit vs data: {worst:e}°");
 }
 
+/// A spring between two bodies: a line from its point on the gimbal to its point on the float,
+/// in the earth frame, at every pose shown, each end carried through its body's recorded poses.
+#[test]
+fn springs_are_drawn_between_their_bodies() {
+    let dir = workdir("spring");
+    let run = dir.join("spring.mcap");
+    common::write_recording_with_pots(&run, SAMPLES, RATE_HZ);
+    let rrd = dir.join("spring.rrd");
+    let opts = ViewOptions {
+        sink: Sink::Save(rrd.clone()),
+        max_pose_rate_hz: 1.0,
+        ..Default::default()
+    };
+    view(std::slice::from_ref(&run), &opts).expect("view");
+    let Some(py) = rerun_python() else { return };
+    let d = dump(&py, &rrd);
+    let entity = "/runs/spring/earth/springs/hh";
+    let (t, strips) = temporal(&d, entity, "strips");
+    assert!(t.len() > 100, "{entity}: {} times", t.len());
+    // p in a frame, carried up the synthetic chain to the earth frame.
+    let rotate = |q: [f64; 4], v: [f64; 3]| {
+        let (x, y, z, w) = (q[0], q[1], q[2], q[3]);
+        let u = [
+            y * v[2] - z * v[1],
+            z * v[0] - x * v[2],
+            x * v[1] - y * v[0],
+        ];
+        let uu = [
+            y * u[2] - z * u[1],
+            z * u[0] - x * u[2],
+            x * u[1] - y * u[0],
+        ];
+        [0, 1, 2].map(|i| v[i] + 2.0 * (w * u[i] + uu[i]))
+    };
+    let in_earth = |frame: &str, p: [f64; 3], time: f64| {
+        let mut x = p;
+        let mut f = frame;
+        while let Some((_, parent)) = common::FRAMES.iter().find(|(c, _)| *c == f) {
+            let (tr, q) = common::pose(f, time);
+            let r = rotate(q, x);
+            x = [0, 1, 2].map(|i| r[i] + tr[i]);
+            f = parent;
+        }
+        x
+    };
+    let s = common::spring();
+    for (k, &ns) in t.iter().enumerate() {
+        let time = ns as f64 * 1e-9;
+        let ends = [
+            in_earth("gimbal", s.point_m, time),
+            in_earth(&s.other_body, s.other_point_m, time),
+        ];
+        let strip: Vec<Vec<f64>> = strips[k][0]
+            .as_array()
+            .expect("a strip")
+            .iter()
+            .map(f64s)
+            .collect();
+        assert_eq!(strip.len(), 2, "{entity}[{k}]");
+        for (got, want) in strip.iter().zip(&ends) {
+            for i in 0..3 {
+                assert!(
+                    (got[i] - want[i]).abs() < 1e-5,
+                    "{entity}[{k}]: {got:?} vs {want:?}"
+                );
+            }
+        }
+    }
+}
+
 /// A liquid tank on a body: the compartments' outlines are static in the carrier's frame, and
 /// each compartment's oil is a unit cylinder scaled to c + Σ aᵢ·levelᵢ and centred half way up
 /// over its floor, at every kept sample, from the recorded levels.

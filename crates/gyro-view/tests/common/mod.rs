@@ -7,8 +7,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use gyro_mcap::contract::{
-    BodyShape, PotsDrawing, TankCompartmentDrawing, TankDrawing, bodies_record, compass_state,
-    design_record, events, result_record, run_record, ship_state, status, tf,
+    BodyShape, PotsDrawing, SpringDrawing, TankCompartmentDrawing, TankDrawing, bodies_record,
+    compass_state, design_record, events, result_record, run_record, ship_state, status, tf,
 };
 use gyro_mcap::{Pose, RecordingWriter, Value, WriterOptions};
 
@@ -98,6 +98,15 @@ pub fn tank() -> TankDrawing {
         rest_depth_m: 0.01,
         floor_height_m: -0.07,
         compartments: vec![compartment(0.05, 1.0), compartment(-0.05, -1.0)],
+    }
+}
+
+/// The spring [`write_recording_with_pots`] also puts between the gimbal and the float.
+pub fn spring() -> SpringDrawing {
+    SpringDrawing {
+        other_body: "float".into(),
+        point_m: [0.1, 0.0, 0.0],
+        other_point_m: [0.0, 0.05, -0.02],
     }
 }
 
@@ -261,6 +270,10 @@ fn write(path: &Path, n: usize, rate_hz: f64, with_pots: bool) {
         bodies.insert(
             bodies_record::tank_key("float", "oil"),
             tank().metadata_value(),
+        );
+        bodies.insert(
+            bodies_record::spring_key("gimbal", "hh"),
+            spring().metadata_value(),
         );
     }
     w.write_metadata(bodies_record::NAME, &bodies)
