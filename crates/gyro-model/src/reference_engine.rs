@@ -225,28 +225,15 @@ pub fn evaluate<T: Real, const N: usize>(
         }
     }
 
-    for pots in &chain.pots {
-        let terms = pots::Terms {
-            p2: &mut p2,
-            b: &mut b,
-            t2: &mut t2,
-            t0: &mut t0,
-            v: &mut v,
-            m: &mut *out.m,
-        };
-        pots::add(pots, &kin[pots.body], &q, n, inp, &w0, terms);
-    }
-    for tank in &chain.tanks {
-        let terms = pots::Terms {
-            p2: &mut p2,
-            b: &mut b,
-            t2: &mut t2,
-            t0: &mut t0,
-            v: &mut v,
-            m: &mut *out.m,
-        };
-        tank::add(tank, &kin[tank.body], &q, n, inp, &w0, terms);
-    }
+    let terms = pots::Terms {
+        p2: &mut p2,
+        b: &mut b,
+        t2: &mut t2,
+        t0: &mut t0,
+        v: &mut v,
+        m: &mut *out.m,
+    };
+    pots::add_liquids(chain, &kin, &q, inp, &w0, terms);
 
     // Generalised forces.
     let mut qf = [T::zero(); N];

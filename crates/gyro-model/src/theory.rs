@@ -6,6 +6,7 @@
 //! `shared/physics/sperry-1911-and-slough.md` (Beghin ch. IV, eqs. 6, 10, 11, 40).
 
 use crate::constants::{EARTH_RADIUS_M, EARTH_RATE_RAD_PER_S, STANDARD_GRAVITY_M_PER_S2};
+use crate::dual::{M3, V3};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 /// Villarceau's pendulum form of Foucault's gyroscope: γ″ = (g/a)(−sin γ + 2δ sin γ cos γ).
@@ -652,13 +653,13 @@ impl ThreeGyro {
         let rotor = d.bodies[d.body_index("south_rotor")?].rotor.as_ref()?;
         // Each body's rotation and origin in the float's axes at rest (hinges at zero).
         let n = d.bodies.len();
-        let mut pose: Vec<Option<Frame3>> = vec![None; n];
-        pose[float] = Some((identity3(), [0.0; 3]));
+        let mut pose: Vec<Option<(M3<f64>, V3<f64>)>> = vec![None; n];
+        pose[float] = Some((M3::identity(), V3::zero()));
         for i in float + 1..n {
             let b = &d.bodies[i];
             if let Some((rp, op)) = b.parent.and_then(|p| pose[p]) {
-                let r = mat3(&rp, &b.joint_rotation);
-                let o = add3(&op, &mat3_v(&rp, &b.joint_origin_m));
+                let r = rp.mul_m(&M3::from_f64(b.joint_rotation));
+                let o = op.add(&rp.mul_v(&V3::from_f64(b.joint_origin_m)));
                 pose[i] = Some((r, o));
             }
         }
@@ -666,9 +667,11 @@ impl ThreeGyro {
         for (i, p) in pose.iter().enumerate() {
             let Some((r, o)) = p else { continue };
             let b = &d.bodies[i];
-            let c = add3(o, &mat3_v(r, &b.cg_m));
+            let c = o.add(&r.mul_v(&V3::from_f64(b.cg_m))).0;
             moment -= g * b.mass_kg * c[2];
-            let rot = mat3(&mat3(r, &b.inertia_kg_m2), &transpose3(r));
+            // R I Rᵀ: the body's inertia in the float's axes.
+            let ri = r.mul_m(&M3::from_f64(b.inertia_kg_m2));
+            let rot = ri.mul_m(&M3([0, 1, 2].map(|j| r.col(j).0))).0;
             let c2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
             for (j, row) in inertia.iter_mut().enumerate() {
                 for (k, x) in row.iter_mut().enumerate() {
@@ -868,31 +871,6 @@ impl ThreeGyro {
         }
         (0.5 * (a + b)).exp()
     }
-}
-
-/// A body's rotation and origin in another body's axes.
-type Frame3 = ([[f64; 3]; 3], [f64; 3]);
-
-fn identity3() -> [[f64; 3]; 3] {
-    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-}
-fn mat3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    let mut c = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            c[i][j] = (0..3).map(|k| a[i][k] * b[k][j]).sum();
-        }
-    }
-    c
-}
-fn mat3_v(a: &[[f64; 3]; 3], v: &[f64; 3]) -> [f64; 3] {
-    [0, 1, 2].map(|i| a[i][0] * v[0] + a[i][1] * v[1] + a[i][2] * v[2])
-}
-fn transpose3(a: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    [0, 1, 2].map(|i| [a[0][i], a[1][i], a[2][i]])
-}
-fn add3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
 /// Roots of Σ cᵢ rⁱ (coefficients lowest first) as (re, im), by the companion matrix, then

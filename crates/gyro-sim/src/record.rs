@@ -641,14 +641,9 @@ fn bodies_metadata(model: &CompiledModel<ShipProgram>) -> BTreeMap<String, Strin
         let compartments = (0..t.compartments.len())
             .map(|i| {
                 let c = &t.compartments[i];
-                let coefficients = if t.levels.is_empty() {
-                    Vec::new()
-                } else {
-                    t.level_coefficients(i)
-                };
                 let (level_fields, level_coefficients) = fields
                     .iter()
-                    .zip(coefficients)
+                    .zip(t.level_coefficients(i).iter().copied())
                     .filter(|(_, a)| *a != 0.0)
                     .map(|(f, a)| (f.clone(), a))
                     .unzip();

@@ -9,9 +9,7 @@
 
 use crate::support::*;
 use gyro_model::theory::ThreeGyro;
-use gyro_model::{
-    CompiledModel, Design, Effects, Fidelity, InitialCondition, ModelOptions, Moored,
-};
+use gyro_model::{CompiledModel, Design, Fidelity, Moored};
 use gyro_sim::SceneOverrides;
 use gyro_sim::solvers::Method;
 use std::f64::consts::TAU;
@@ -50,29 +48,7 @@ fn design(lat_deg: f64, parameters: &[(&str, f64)], keys: &[(&str, &str)]) -> De
 /// Moored at `lat_deg` with only the Earth's rotation; friction (the mercury's drag, the pivots'
 /// and the tank's flow) on or off.
 fn compile(d: Design, lat_deg: f64, fidelity: Fidelity, friction: bool) -> CompiledModel<Moored> {
-    let mut fx = Effects::all();
-    fx.base = gyro_model::BaseEffects {
-        earth_rotation: true,
-        ..Default::default()
-    };
-    fx.friction = friction;
-    CompiledModel::compile(
-        d,
-        Moored {
-            latitude_rad: lat_deg.to_radians(),
-            heading_rad: 0.0,
-        },
-        ModelOptions {
-            fidelity,
-            effects: fx,
-            pivot_m: [0.0; 3],
-            initial: InitialCondition {
-                from_equilibrium: true,
-                ..Default::default()
-            },
-        },
-    )
-    .expect("compiles")
+    moored(d, lat_deg, fidelity, friction)
 }
 
 /// The linearisation's modes (`full`), upper half-plane and real ones, by |r|.

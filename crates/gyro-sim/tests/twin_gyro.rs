@@ -8,9 +8,7 @@
 
 use crate::support::*;
 use gyro_model::theory::{TwinGyro, polynomial_roots};
-use gyro_model::{
-    CompiledModel, Design, Effects, Fidelity, InitialCondition, ModelOptions, Moored,
-};
+use gyro_model::{CompiledModel, Design, Fidelity, Moored};
 use gyro_sim::SceneOverrides;
 use gyro_sim::solvers::Method;
 use std::f64::consts::TAU;
@@ -48,28 +46,7 @@ fn allowing(lat_deg: f64, overrides: &[(&str, f64)]) -> Design {
 }
 
 fn compile(d: Design, lat_deg: f64) -> CompiledModel<Moored> {
-    let mut fx = Effects::all();
-    fx.base = gyro_model::BaseEffects {
-        earth_rotation: true,
-        ..Default::default()
-    };
-    CompiledModel::compile(
-        d,
-        Moored {
-            latitude_rad: lat_deg.to_radians(),
-            heading_rad: 0.0,
-        },
-        ModelOptions {
-            fidelity: Fidelity::Full,
-            effects: fx,
-            pivot_m: [0.0; 3],
-            initial: InitialCondition {
-                from_equilibrium: true,
-                ..Default::default()
-            },
-        },
-    )
-    .expect("compiles")
+    moored(d, lat_deg, Fidelity::Full, true)
 }
 
 /// The compass's slow modes (|r| below 0.01 /s: the two precession pairs), slowest first.

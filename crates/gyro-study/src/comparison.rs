@@ -222,133 +222,144 @@ fn backswing(entries: &[Entry], design: &str, k: &Constants) -> Option<(f64, f64
 /// The text's comparative claims checked against the entries. Tolerances are stated in each
 /// claim; a claim whose design is not among the entries is `NotEvaluated`.
 pub fn evaluate(entries: &[Entry], k: &Constants) -> Vec<Claim> {
-    let mut out = Vec::new();
+    vec![
+        anschutz_rolling_12deg(entries, k),
+        twin_rolling_two_thirds(entries, k),
+        sperry_remedy_insufficient(entries, k),
+        three_gyro_roll_extremely_small(entries, k),
+        slough_backswing(entries, k),
+        three_gyro_backswing_twice_slough(entries, k),
+        slough_period_over_85min(entries, k),
+        three_gyro_period_70min(entries, k),
+    ]
+}
 
-    // 1. Anschütz 1906 rolling ≈ 12° on intercardinal headings, nothing on cardinal ones.
+/// 1. Anschütz 1906 rolling ≈ 12° on intercardinal headings, nothing on cardinal ones.
+fn anschutz_rolling_12deg(entries: &[Entry], _k: &Constants) -> Claim {
     let c = claim(
         "anschutz-rolling-12deg",
         "Anschütz 1906: rolling 10 s with 0.70 m at the compass gives ≈ 12° on intercardinal headings and nothing on cardinal ones (§40, L1452)",
         &[ANSCHUTZ_1906],
         "the magnitude of the error on 045° (net of the calm 50°N equilibrium) within 12° ± 1.5° (the text rounds; its own corrected formula gives 12.7°), and on 000° below 5 % of it",
     );
-    out.push(
-        match (
-            rolling_net(entries, ROLLING_045, ANSCHUTZ_1906),
-            rolling_net(entries, ROLLING_000, ANSCHUTZ_1906),
-        ) {
-            (Some(i), Some(c0)) => {
-                let mut c = c;
-                let ok = (deg(i.abs()) - 12.0).abs() <= 1.5 && c0.abs() < 0.05 * i.abs();
-                c.measured = format!(
-                    "{:.2}° on 045°, {:.3}° on 000°",
-                    deg(i.abs()),
-                    deg(c0.abs())
-                );
-                c.values.insert("error_045_rad".into(), i);
-                c.values.insert("error_000_rad".into(), c0);
-                c.verdict = verdict(ok);
-                c
-            }
-            _ => missing(
-                c,
-                entries,
-                &[
-                    (ROLLING_045, ANSCHUTZ_1906),
-                    (ROLLING_000, ANSCHUTZ_1906),
-                    (HARBOUR_50N, ANSCHUTZ_1906),
-                ],
-            ),
-        },
-    );
+    match (
+        rolling_net(entries, ROLLING_045, ANSCHUTZ_1906),
+        rolling_net(entries, ROLLING_000, ANSCHUTZ_1906),
+    ) {
+        (Some(i), Some(c0)) => {
+            let mut c = c;
+            let ok = (deg(i.abs()) - 12.0).abs() <= 1.5 && c0.abs() < 0.05 * i.abs();
+            c.measured = format!(
+                "{:.2}° on 045°, {:.3}° on 000°",
+                deg(i.abs()),
+                deg(c0.abs())
+            );
+            c.values.insert("error_045_rad".into(), i);
+            c.values.insert("error_000_rad".into(), c0);
+            c.verdict = verdict(ok);
+            c
+        }
+        _ => missing(
+            c,
+            entries,
+            &[
+                (ROLLING_045, ANSCHUTZ_1906),
+                (ROLLING_000, ANSCHUTZ_1906),
+                (HARBOUR_50N, ANSCHUTZ_1906),
+            ],
+        ),
+    }
+}
 
-    // 2. Twin-gyro: factor (61) (→ 2/3) of the two gyros on one frame.
+/// 2. Twin-gyro: factor (61) (→ 2/3) of the two gyros on one frame.
+fn twin_rolling_two_thirds(entries: &[Entry], k: &Constants) -> Claim {
     let c = claim(
         "twin-rolling-two-thirds",
         "Sperry twin-gyro 1918: its mean rolling error is the factor (61) — 2/3 when M ≫ x, τ — of the two gyros' on one frame (2IΩ, 3ap), i.e. the West gyro alone as an Anschütz (§58, L2523–2541)",
         &[TWIN_1918],
         "measured error on 045° (net of the calm 50°N equilibrium) / the single-frame closed form within 10 % of the factor (61) computed from the design's own numbers",
     );
-    out.push(
-        match (
-            rolling_net(entries, ROLLING_045, TWIN_1918),
-            k.twin_single_frame_error_rad,
-            k.twin_rolling_factor,
-        ) {
-            (Some(e), Some(single), Some(factor)) => {
-                let mut c = c;
-                let ratio = e.abs() / single;
-                c.measured = format!(
-                    "{:.3}° against a single frame's {:.3}°: ratio {ratio:.3}, factor (61) {factor:.3} (the design does not apply the compensation (54))",
-                    deg(e.abs()),
-                    deg(single)
-                );
-                c.values.insert("error_045_rad".into(), e);
-                c.values.insert("single_frame_error_rad".into(), single);
-                c.values.insert("ratio".into(), ratio);
-                c.values.insert("factor_61".into(), factor);
-                c.verdict = verdict((ratio / factor - 1.0).abs() <= 0.10);
-                c
-            }
-            _ => missing(
-                c,
-                entries,
-                &[(ROLLING_045, TWIN_1918), (HARBOUR_50N, TWIN_1918)],
-            ),
-        },
-    );
+    match (
+        rolling_net(entries, ROLLING_045, TWIN_1918),
+        k.twin_single_frame_error_rad,
+        k.twin_rolling_factor,
+    ) {
+        (Some(e), Some(single), Some(factor)) => {
+            let mut c = c;
+            let ratio = e.abs() / single;
+            c.measured = format!(
+                "{:.3}° against a single frame's {:.3}°: ratio {ratio:.3}, factor (61) {factor:.3} (the design does not apply the compensation (54))",
+                deg(e.abs()),
+                deg(single)
+            );
+            c.values.insert("error_045_rad".into(), e);
+            c.values.insert("single_frame_error_rad".into(), single);
+            c.values.insert("ratio".into(), ratio);
+            c.values.insert("factor_61".into(), factor);
+            c.verdict = verdict((ratio / factor - 1.0).abs() <= 0.10);
+            c
+        }
+        _ => missing(
+            c,
+            entries,
+            &[(ROLLING_045, TWIN_1918), (HARBOUR_50N, TWIN_1918)],
+        ),
+    }
+}
 
-    // 3. Sperry: the gyro-ballistic remedy at 12–15 s is insufficient.
+/// 3. Sperry: the gyro-ballistic remedy at 12–15 s is insufficient.
+fn sperry_remedy_insufficient(entries: &[Entry], k: &Constants) -> Claim {
     let c = claim(
         "sperry-remedy-insufficient",
         "Sperry 1911: the gyro-ballistic pendulum removes the rolling error only if its period is much longer than the swell's; its 12–15 s \"semble nettement insuffisante\" (§48, L1868)",
         &[SPERRY_1911],
         "the measured error on 045° (net of the calm 50°N equilibrium, i.e. of the latitude error) is at least 10 % of the error its pendulum's moment (Ql + ϖb) would give as an Anschütz (the remedy removes less than 90 %)",
     );
-    out.push(
-        match (
-            rolling_net(entries, ROLLING_045, SPERRY_1911),
-            k.sperry_anschutz_type_error_rad,
-        ) {
-            (Some(e), Some(a)) => {
-                let mut c = c;
-                let share = e.abs() / a;
-                c.measured = format!(
-                    "{:.3}° on 045° against {:.3}° as an Anschütz: {:.0} % remains{}",
-                    deg(e.abs()),
-                    deg(a),
-                    100.0 * share,
-                    match (k.sperry_re_h, k.sperry_pendulum_period_s) {
-                        (Some(h), Some(p)) => format!(
-                            " (pendulum period {p:.1} s: Re H(is) = {h:.3} of (48)'s pendulum term)"
-                        ),
-                        _ => String::new(),
-                    }
-                );
-                c.values.insert("error_045_rad".into(), e);
-                c.values.insert("anschutz_type_error_rad".into(), a);
-                c.values.insert("remaining_share".into(), share);
-                if let Some(h) = k.sperry_re_h {
-                    c.values.insert("re_h".into(), h);
+    match (
+        rolling_net(entries, ROLLING_045, SPERRY_1911),
+        k.sperry_anschutz_type_error_rad,
+    ) {
+        (Some(e), Some(a)) => {
+            let mut c = c;
+            let share = e.abs() / a;
+            c.measured = format!(
+                "{:.3}° on 045° against {:.3}° as an Anschütz: {:.0} % remains{}",
+                deg(e.abs()),
+                deg(a),
+                100.0 * share,
+                match (k.sperry_re_h, k.sperry_pendulum_period_s) {
+                    (Some(h), Some(p)) => format!(
+                        " (pendulum period {p:.1} s: Re H(is) = {h:.3} of (48)'s pendulum term)"
+                    ),
+                    _ => String::new(),
                 }
-                c.verdict = verdict(share >= 0.10);
-                c
+            );
+            c.values.insert("error_045_rad".into(), e);
+            c.values.insert("anschutz_type_error_rad".into(), a);
+            c.values.insert("remaining_share".into(), share);
+            if let Some(h) = k.sperry_re_h {
+                c.values.insert("re_h".into(), h);
             }
-            _ => missing(
-                c,
-                entries,
-                &[(ROLLING_045, SPERRY_1911), (HARBOUR_50N, SPERRY_1911)],
-            ),
-        },
-    );
+            c.verdict = verdict(share >= 0.10);
+            c
+        }
+        _ => missing(
+            c,
+            entries,
+            &[(ROLLING_045, SPERRY_1911), (HARBOUR_50N, SPERRY_1911)],
+        ),
+    }
+}
 
-    // 4. Three-gyro: "extremely small" in roll.
+/// 4. Three-gyro: "extremely small" in roll.
+fn three_gyro_roll_extremely_small(entries: &[Entry], _k: &Constants) -> Claim {
     let c = claim(
         "three-gyro-roll-extremely-small",
         "Anschütz three-gyro 1912: under rolling its azimuth error is \"extrêmement faible\" (§70, L3131), where the Anschütz 1906 errs ≈ 12°",
         &[THREE_GYRO_1912],
         "the magnitude of the error on 045° (net of the calm 50°N equilibrium) below 0.1°, and below a tenth of the Anschütz 1906's when it is in the comparison",
     );
-    out.push(match rolling_net(entries, ROLLING_045, THREE_GYRO_1912) {
+    match rolling_net(entries, ROLLING_045, THREE_GYRO_1912) {
         Some(e) => {
             let mut c = c;
             let a1906 = rolling_net(entries, ROLLING_045, ANSCHUTZ_1906);
@@ -385,16 +396,18 @@ pub fn evaluate(entries: &[Entry], k: &Constants) -> Vec<Claim> {
                 (HARBOUR_50N, THREE_GYRO_1912),
             ],
         ),
-    });
+    }
+}
 
-    // 5. The Slough's back-swing, its own formula (needed by 6).
+/// 5. The Slough's back-swing, its own formula (needed by 6).
+fn slough_backswing(entries: &[Entry], k: &Constants) -> Claim {
     let c = claim(
         "slough-backswing",
         "Slough, Hermione trial: after a speed change heading North the mercury drives the card back at once, against its deviation, at ζ′ = −8μπ²/(T²ε cos L)·δv/g (§70, L3116–3123)",
         &[SLOUGH],
         "back-swing rate (2–8 min after the change) opposite to the swing, its magnitude within 35 % of the formula with T and μ fitted on the Slough's 50°N release",
     );
-    out.push(match backswing(entries, SLOUGH, k) {
+    match backswing(entries, SLOUGH, k) {
         Some((rate, swing, t, mu, norm)) => {
             let mut c = c;
             c.measured = format!(
@@ -412,52 +425,59 @@ pub fn evaluate(entries: &[Entry], k: &Constants) -> Vec<Claim> {
             c
         }
         None => missing(c, entries, &[(HERMIONE, SLOUGH), (HARBOUR_50N, SLOUGH)]),
-    });
+    }
+}
 
-    // 6. Three-gyro back-swing twice the Slough's at equal period and damping.
+/// 6. Three-gyro back-swing twice the Slough's at equal period and damping.
+fn three_gyro_backswing_twice_slough(entries: &[Entry], k: &Constants) -> Claim {
     let c = claim(
         "three-gyro-backswing-twice-slough",
         "Anschütz three-gyro 1912, Hermione trial: its oil drives the card back after a speed change at exactly twice the Slough's rate at equal period and damping (§70, L3123; 2m₂/m₃ ≈ 2.06 by the errata)",
         &[THREE_GYRO_1912, SLOUGH],
         "both back-swings opposite to their swings; the ratio of the back-swing rates, each normalised by 8μπ²/(T²ε cos L)·|δv|/g with its own fitted T and μ, within 2.06 ± 25 %",
     );
-    out.push(
-        match (backswing(entries, THREE_GYRO_1912, k), backswing(entries, SLOUGH, k)) {
-            (Some((r3, s3, _, _, n3)), Some((rs, ss, _, _, ns))) => {
-                let mut c = c;
-                let ratio = n3 / ns;
-                c.measured = format!(
-                    "normalised back-swings {n3:.2} (three-gyro) and {ns:.2} (Slough): ratio {ratio:.2}; raw rates {:.3}°/h and {:.3}°/h (ratio {:.2})",
-                    deg(r3) * 3600.0,
-                    deg(rs) * 3600.0,
-                    r3.abs() / rs.abs()
-                );
-                c.values.insert("normalised_ratio".into(), ratio);
-                c.values.insert("raw_rate_ratio".into(), r3.abs() / rs.abs());
-                c.verdict = verdict(r3 * s3 < 0.0 && rs * ss < 0.0 && (ratio / 2.06 - 1.0).abs() <= 0.25);
-                c
-            }
-            _ => missing(
-                c,
-                entries,
-                &[
-                    (HERMIONE, THREE_GYRO_1912),
-                    (HARBOUR_50N, THREE_GYRO_1912),
-                    (HERMIONE, SLOUGH),
-                    (HARBOUR_50N, SLOUGH),
-                ],
-            ),
-        },
-    );
+    match (
+        backswing(entries, THREE_GYRO_1912, k),
+        backswing(entries, SLOUGH, k),
+    ) {
+        (Some((r3, s3, _, _, n3)), Some((rs, ss, _, _, ns))) => {
+            let mut c = c;
+            let ratio = n3 / ns;
+            c.measured = format!(
+                "normalised back-swings {n3:.2} (three-gyro) and {ns:.2} (Slough): ratio {ratio:.2}; raw rates {:.3}°/h and {:.3}°/h (ratio {:.2})",
+                deg(r3) * 3600.0,
+                deg(rs) * 3600.0,
+                r3.abs() / rs.abs()
+            );
+            c.values.insert("normalised_ratio".into(), ratio);
+            c.values
+                .insert("raw_rate_ratio".into(), r3.abs() / rs.abs());
+            c.verdict =
+                verdict(r3 * s3 < 0.0 && rs * ss < 0.0 && (ratio / 2.06 - 1.0).abs() <= 0.25);
+            c
+        }
+        _ => missing(
+            c,
+            entries,
+            &[
+                (HERMIONE, THREE_GYRO_1912),
+                (HARBOUR_50N, THREE_GYRO_1912),
+                (HERMIONE, SLOUGH),
+                (HARBOUR_50N, SLOUGH),
+            ],
+        ),
+    }
+}
 
-    // 7. Periods in the trial: the Slough over 85 min …
+/// 7. Periods in the trial: the Slough over 85 min …
+fn slough_period_over_85min(entries: &[Entry], _k: &Constants) -> Claim {
     let c = claim(
         "slough-period-over-85min",
         "Slough, Hermione trial: \"une période dépassant quatre-vingt-cinq minutes\" (§70, L3123)",
         &[SLOUGH],
         "damped period fitted on the 50°N release above 85 min (the text does not give the trial's latitude)",
     );
-    out.push(match period_and_decay(entries, SLOUGH) {
+    match period_and_decay(entries, SLOUGH) {
         Some((t, _)) => {
             let mut c = c;
             c.measured = format!("{:.1} min at 50°N", t / 60.0);
@@ -466,16 +486,18 @@ pub fn evaluate(entries: &[Entry], k: &Constants) -> Vec<Claim> {
             c
         }
         None => missing(c, entries, &[(HARBOUR_50N, SLOUGH)]),
-    });
+    }
+}
 
-    // 8. … and the three-gyro's ≈ 70 min.
+/// 8. … and the three-gyro's ≈ 70 min.
+fn three_gyro_period_70min(entries: &[Entry], _k: &Constants) -> Claim {
     let c = claim(
         "three-gyro-period-70min",
         "Anschütz three-gyro 1912, Hermione trial: \"la période de l'Anschütz était voisine de soixante-dix minutes\" (§70, L3125), shorter than the Slough's",
         &[THREE_GYRO_1912],
         "damped period fitted on the 50°N release within 70 min ± 10 %, and shorter than the Slough's when it is in the comparison",
     );
-    out.push(match period_and_decay(entries, THREE_GYRO_1912) {
+    match period_and_decay(entries, THREE_GYRO_1912) {
         Some((t, _)) => {
             let mut c = c;
             let slough = period_and_decay(entries, SLOUGH).map(|(ts, _)| ts);
@@ -489,8 +511,7 @@ pub fn evaluate(entries: &[Entry], k: &Constants) -> Vec<Claim> {
             c
         }
         None => missing(c, entries, &[(HARBOUR_50N, THREE_GYRO_1912)]),
-    });
-    out
+    }
 }
 
 /// Timing of the sweep that produced the entries (measured when one invocation ran every run).

@@ -96,6 +96,28 @@ pub struct Tank {
     pub dissipation: Vec<f64>,
     /// The flow's own inertia matrix in the level rates (columns and tubes), kg.
     pub flow_inertia: Vec<f64>,
+    /// Per compartment, its level's coefficients on the independent levels (formed once: the
+    /// engine reads them at every evaluation).
+    level_map: Vec<Vec<f64>>,
+}
+
+/// Per compartment, the coefficients of its level on the first N − 1 compartments' levels.
+fn level_map(compartments: &[Compartment]) -> Vec<Vec<f64>> {
+    let m = compartments.len() - 1;
+    let last = compartments[m].area_m2;
+    (0..=m)
+        .map(|i| {
+            (0..m)
+                .map(|j| {
+                    if i < m {
+                        (i == j) as u8 as f64
+                    } else {
+                        -compartments[j].area_m2 / last
+                    }
+                })
+                .collect()
+        })
+        .collect()
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -108,17 +130,10 @@ pub struct Compartment {
 
 impl Tank {
     /// Each compartment's level as Σ coefficient × independent level (index into `levels`):
-    /// the first N − 1 are their own; the last keeps the volume, −Σ Sᵢhᵢ / S_N.
-    pub fn level_coefficients(&self, compartment: usize) -> Vec<f64> {
-        let m = self.compartments.len() - 1;
-        if compartment < m {
-            (0..m).map(|j| (j == compartment) as u8 as f64).collect()
-        } else {
-            let last = self.compartments[m].area_m2;
-            (0..m)
-                .map(|j| -self.compartments[j].area_m2 / last)
-                .collect()
-        }
+    /// the first N − 1 are their own; the last keeps the volume, −Σ Sᵢhᵢ / S_N. Empty with
+    /// the valves closed.
+    pub fn level_coefficients(&self, compartment: usize) -> &[f64] {
+        self.level_map.get(compartment).map_or(&[], Vec::as_slice)
     }
     /// Total oil mass, kg.
     pub fn oil_mass_kg(&self) -> f64 {
@@ -259,6 +274,7 @@ pub(super) fn tanks(
             levels: Vec::new(),
             dissipation: Vec::new(),
             flow_inertia: Vec::new(),
+            level_map: Vec::new(),
         };
         if t.valves == Valves::Open {
             let (d, m) = rate_matrices(&tank).ok_or_else(|| {
@@ -269,6 +285,7 @@ pub(super) fn tanks(
             })?;
             tank.dissipation = d;
             tank.flow_inertia = m;
+            tank.level_map = level_map(&tank.compartments);
             for c in &tank.compartments[..nc - 1] {
                 let name = format!("{}_{}", t.name, c.name);
                 if coordinates.iter().any(|o| o.name == name) {

@@ -30,6 +30,39 @@ pub(super) struct Terms<'a, T: Real, const N: usize> {
     pub m: &'a mut [T],
 }
 
+impl<T: Real, const N: usize> Terms<'_, T, N> {
+    /// The same accumulators, borrowed again for one more contribution.
+    pub fn reborrow(&mut self) -> Terms<'_, T, N> {
+        Terms {
+            p2: &mut *self.p2,
+            b: &mut *self.b,
+            t2: &mut *self.t2,
+            t0: &mut *self.t0,
+            v: &mut *self.v,
+            m: &mut *self.m,
+        }
+    }
+}
+
+/// Adds every liquid of the chain (communicating pots, tanks), each on its carrier's kinematics
+/// `kin[carrier]`, to the Lagrangian's terms.
+pub(super) fn add_liquids<T: Real, const N: usize>(
+    chain: &Chain,
+    kin: &[BodyKin<Jet<T, N>, N>],
+    q: &[Jet<T, N>; N],
+    inp: &EvalInput<T>,
+    w0: &V3<Jet<T, N>>,
+    mut out: Terms<T, N>,
+) {
+    let n = chain.n;
+    for pots in &chain.pots {
+        add(pots, &kin[pots.body], q, n, inp, w0, out.reborrow());
+    }
+    for tank in &chain.tanks {
+        super::tank::add(tank, &kin[tank.body], q, n, inp, w0, out.reborrow());
+    }
+}
+
 /// Adds one set of pots, carried by a body with kinematics `k`, to the Lagrangian's terms.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn add<T: Real, const N: usize>(
@@ -39,7 +72,7 @@ pub(super) fn add<T: Real, const N: usize>(
     n: usize,
     inp: &EvalInput<T>,
     w0: &V3<Jet<T, N>>,
-    out: Terms<T, N>,
+    mut out: Terms<T, N>,
 ) {
     let dropped = |i: usize| inp.drop_quadratic.get(i).copied().unwrap_or(false);
     let iu = pots.level;
@@ -52,15 +85,7 @@ pub(super) fn add<T: Real, const N: usize>(
     for (j, sign) in [(0usize, 1.0), (1, -1.0)] {
         let len = lvl * sign + c;
         let r_body = V3::from_f64(pots.bases_m[j]).add(&a.scale(len * 0.5));
-        let terms = Terms {
-            p2: &mut *out.p2,
-            b: &mut *out.b,
-            t2: &mut *out.t2,
-            t0: &mut *out.t0,
-            v: &mut *out.v,
-            m: &mut *out.m,
-        };
-        carried_mass(k, &r_body, len * rho_w0, n, inp, w0, terms);
+        carried_mass(k, &r_body, len * rho_w0, n, inp, w0, out.reborrow());
     }
 
     // The flow relative to the carrier: T = u̇ (Σᵢ Gᵢ q̇ᵢ + G₀) + ½ℰu̇².
@@ -189,28 +214,15 @@ pub(super) fn evaluate<T: Real, const N: usize>(
         let k = body_kinematics(&kin, body, &q, n, &base_r);
         kin.push(k);
     }
-    for pots in &chain.pots {
-        let terms = Terms {
-            p2: &mut p2,
-            b: &mut b,
-            t2: &mut t2,
-            t0: &mut t0,
-            v: &mut v,
-            m: &mut m[..n * n],
-        };
-        add(pots, &kin[pots.body], &q, n, inp, &w0, terms);
-    }
-    for tank in &chain.tanks {
-        let terms = Terms {
-            p2: &mut p2,
-            b: &mut b,
-            t2: &mut t2,
-            t0: &mut t0,
-            v: &mut v,
-            m: &mut m[..n * n],
-        };
-        super::tank::add(tank, &kin[tank.body], &q, n, inp, &w0, terms);
-    }
+    let terms = Terms {
+        p2: &mut p2,
+        b: &mut b,
+        t2: &mut t2,
+        t0: &mut t0,
+        v: &mut v,
+        m: &mut m[..n * n],
+    };
+    add_liquids(chain, &kin, &q, inp, &w0, terms);
     for i in 0..n {
         out.c[i] += t2.d[i] + t0.d[i] - v.d[i] - p2[i].d[n] - b[i].d[n];
         for kk in 0..n {

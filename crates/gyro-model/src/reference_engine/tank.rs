@@ -28,18 +28,15 @@ pub(super) fn add<T: Real, const N: usize>(
     n: usize,
     inp: &EvalInput<T>,
     w0: &V3<Jet<T, N>>,
-    out: Terms<T, N>,
+    mut out: Terms<T, N>,
 ) {
     let rho = tank.density_kg_per_m3;
     let c = tank.rest_depth_m;
-    let open = !tank.levels.is_empty();
     for (i, comp) in tank.compartments.iter().enumerate() {
         let mut h = Jet::<T, N>::zero();
-        if open {
-            for (j, a) in tank.level_coefficients(i).into_iter().enumerate() {
-                if a != 0.0 {
-                    h += q[tank.levels[j]] * a;
-                }
+        for (&a, &l) in tank.level_coefficients(i).iter().zip(&tank.levels) {
+            if a != 0.0 {
+                h += q[l] * a;
             }
         }
         let height = h + c;
@@ -48,15 +45,15 @@ pub(super) fn add<T: Real, const N: usize>(
             Jet::cst(comp.centroid_m[1]),
             height * 0.5 + tank.floor_height_m,
         ]);
-        let terms = Terms {
-            p2: &mut *out.p2,
-            b: &mut *out.b,
-            t2: &mut *out.t2,
-            t0: &mut *out.t0,
-            v: &mut *out.v,
-            m: &mut *out.m,
-        };
-        carried_mass(k, &r_body, height * (rho * comp.area_m2), n, inp, w0, terms);
+        carried_mass(
+            k,
+            &r_body,
+            height * (rho * comp.area_m2),
+            n,
+            inp,
+            w0,
+            out.reborrow(),
+        );
     }
 
     // Free surfaces: −½ρ Σ (I_x g_y² + I_y g_x²)/|g|, g in the carrier's axes.

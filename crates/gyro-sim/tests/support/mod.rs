@@ -6,6 +6,43 @@ use gyro_sim::solvers::{Method, Tolerances};
 use gyro_sim::{Scene, SceneOverrides, Simulation};
 use std::ops::ControlFlow;
 
+use gyro_model::{
+    CompiledModel, Design, Effects, Fidelity, InitialCondition, ModelOptions, Moored,
+};
+
+/// `d` moored at `lat_deg` on heading 000° with only the Earth's rotation, started from its
+/// equilibrium; friction (the design's dampers) on or off.
+pub fn moored(
+    d: Design,
+    lat_deg: f64,
+    fidelity: Fidelity,
+    friction: bool,
+) -> CompiledModel<Moored> {
+    let mut fx = Effects::all();
+    fx.base = gyro_model::BaseEffects {
+        earth_rotation: true,
+        ..Default::default()
+    };
+    fx.friction = friction;
+    CompiledModel::compile(
+        d,
+        Moored {
+            latitude_rad: lat_deg.to_radians(),
+            heading_rad: 0.0,
+        },
+        ModelOptions {
+            fidelity,
+            effects: fx,
+            pivot_m: [0.0; 3],
+            initial: InitialCondition {
+                from_equilibrium: true,
+                ..Default::default()
+            },
+        },
+    )
+    .expect("compiles")
+}
+
 pub fn scene_text(name: &str) -> String {
     std::fs::read_to_string(format!(
         "{}/../../scenes/{name}.toml",

@@ -233,6 +233,23 @@ fn write(path: &Path, n: usize, rate_hz: f64, with_pots: bool) {
         ]),
     )
     .expect("meta");
+    let bodies = bodies_metadata(with_pots);
+    w.write_metadata(bodies_record::NAME, &bodies)
+        .expect("meta");
+    w.write_metadata(
+        design_record::NAME,
+        &meta(&[
+            (design_record::TOML, DESIGN_TOML),
+            (design_record::PATH, "synthetic.toml"),
+        ]),
+    )
+    .expect("meta");
+    w.finish().expect("finish");
+}
+
+/// The `bodies` record: the synthetic chain's shapes and parents, and with `with_pots` the
+/// pots, the tank and the spring on them.
+fn bodies_metadata(with_pots: bool) -> BTreeMap<String, String> {
     let mut bodies = BTreeMap::new();
     for (body, parent, shape) in [
         (
@@ -276,15 +293,5 @@ fn write(path: &Path, n: usize, rate_hz: f64, with_pots: bool) {
             spring().metadata_value(),
         );
     }
-    w.write_metadata(bodies_record::NAME, &bodies)
-        .expect("meta");
-    w.write_metadata(
-        design_record::NAME,
-        &meta(&[
-            (design_record::TOML, DESIGN_TOML),
-            (design_record::PATH, "synthetic.toml"),
-        ]),
-    )
-    .expect("meta");
-    w.finish().expect("finish");
+    bodies
 }
