@@ -645,3 +645,53 @@ fn the_oil_follows_a_held_tilt_as_eqs_70_71() {
         assert!((0.85..0.97).contains(&travel(i)), "travel {}", travel(i));
     }
 }
+
+/// A malformed tank is refused with the file, the tank and what is allowed: a tube to an unknown
+/// compartment or to itself, a compartment of no area, tubes that leave the compartments in two
+/// groups, an unknown valve setting.
+#[test]
+fn malformed_tanks_are_refused() {
+    for (from, to, expect) in [
+        (
+            r#"between = ["n8", "n1"]"#,
+            r#"between = ["n8", "x9"]"#,
+            "unknown compartment `x9`",
+        ),
+        (
+            r#"between = ["n8", "n1"]"#,
+            r#"between = ["n8", "n8"]"#,
+            "to itself",
+        ),
+        (
+            r#"area_m2 = "= s1_m2", free_surface_m4 = ["= fs1_x_m4", "= fs1_y_m4"] },
+  { name = "w2""#,
+            r#"area_m2 = 0.0, free_surface_m4 = ["= fs1_x_m4", "= fs1_y_m4"] },
+  { name = "w2""#,
+            "allowed: > 0",
+        ),
+        (
+            r#"valves = "open""#,
+            r#"valves = "ajar""#,
+            "`open` or `closed`",
+        ),
+    ] {
+        assert!(DESIGN.contains(from), "{from}");
+        let text = DESIGN.replacen(from, to, 1);
+        let e = Design::from_toml("three.toml", &text, &[]).expect_err(expect);
+        let msg = e.to_string();
+        println!("{msg}");
+        assert!(msg.contains("three.toml") && msg.contains(expect), "{msg}");
+    }
+    // Two tubes moved so that n1 … s4 and s5 … n8 are no longer joined.
+    let text = DESIGN
+        .replacen(r#"between = ["s4", "s5"]"#, r#"between = ["n1", "w2"]"#, 1)
+        .replacen(r#"between = ["n8", "n1"]"#, r#"between = ["n1", "w2"]"#, 1);
+    let msg = Design::from_toml("three.toml", &text, &[])
+        .expect_err("disconnected")
+        .to_string();
+    println!("{msg}");
+    assert!(
+        msg.contains("tank.oil") && msg.contains("connected network"),
+        "{msg}"
+    );
+}

@@ -261,6 +261,36 @@ pub(super) fn tanks(
                 tube.section_m2,
             ));
         }
+        // Every compartment joined to the first through the tubes (checked on the graph: the
+        // grounded Laplacian of a split network is singular only up to round-off).
+        let mut joined = vec![false; nc];
+        joined[0] = true;
+        let mut grew = true;
+        while grew {
+            grew = false;
+            for &(a, b, ..) in &tubes {
+                if joined[a] != joined[b] {
+                    joined[a] = true;
+                    joined[b] = true;
+                    grew = true;
+                }
+            }
+        }
+        let apart: Vec<&str> = (0..nc).filter(|&i| !joined[i]).map(|i| names[i]).collect();
+        if !apart.is_empty() {
+            return Err(bad(
+                "tube",
+                format!(
+                    "the tubes do not join {} to `{}` (allowed: a connected network)",
+                    apart
+                        .iter()
+                        .map(|n| format!("`{n}`"))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    names[0]
+                ),
+            ));
+        }
         let mut tank = Tank {
             name: t.name.clone(),
             description: t.description.clone(),
