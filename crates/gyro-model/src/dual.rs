@@ -57,6 +57,17 @@ pub trait Real:
     fn one() -> Self {
         Self::cst(1.0)
     }
+    /// Dense-solve hook for tape recording (`crate::tape`): the recording scalar records the
+    /// solve of the leading n×n block of A x = b as one operation (LDLᵀ first if `spd_first`)
+    /// and returns `Some`; every other scalar returns `None` and is eliminated as usual.
+    fn record_solve<const N: usize>(
+        _a: &[[Self; N]; N],
+        _b: &mut [Self; N],
+        _n: usize,
+        _spd_first: bool,
+    ) -> Option<bool> {
+        None
+    }
 }
 
 impl Real for f64 {
@@ -282,6 +293,40 @@ impl<T: Real, const N: usize> Real for Jet<T, N> {
     fn asin(self) -> Self {
         let one = T::one();
         self.chain(self.v.asin(), one / (one - self.v * self.v).sqrt())
+    }
+    /// Dual numbers over a recording scalar record a solve as solves of the values' matrix:
+    /// x = A⁻¹b, then ẋₖ = A⁻¹(ḃₖ − Ȧₖ x) for each direction k that is not structurally zero.
+    /// Over any other scalar: `None` (eliminate as usual).
+    fn record_solve<const M: usize>(
+        a: &[[Self; M]; M],
+        b: &mut [Self; M],
+        n: usize,
+        spd_first: bool,
+    ) -> Option<bool> {
+        let av: [[T; M]; M] = a.map(|row| row.map(|x| x.v));
+        let mut x: [T; M] = b.map(|x| x.v);
+        let solved = T::record_solve(&av, &mut x, n, spd_first)?;
+        let zero = T::zero();
+        for k in 0..N {
+            let mut rk = [zero; M];
+            for i in 0..n {
+                let mut s = b[i].d[k];
+                for j in 0..n {
+                    s -= a[i][j].d[k] * x[j];
+                }
+                rk[i] = s;
+            }
+            if rk[..n].iter().any(|r| *r != zero) {
+                T::record_solve(&av, &mut rk, n, spd_first)?;
+            }
+            for i in 0..n {
+                b[i].d[k] = rk[i];
+            }
+        }
+        for i in 0..n {
+            b[i].v = x[i];
+        }
+        Some(solved)
     }
 }
 

@@ -35,7 +35,7 @@ pub struct ShipKinematics<T> {
 
 /// A ship-motion program: kinematics at any time, as smooth functions between breakpoints.
 /// Implementations must satisfy dL/dt = v cos(heading)/R (the program integrates its own track).
-pub trait ShipMotion {
+pub trait ShipMotion: Sync {
     fn kinematics<T: Real>(&self, t: T) -> ShipKinematics<T>;
     /// Times where the motion is not smooth (manoeuvre starts and ends).
     fn breakpoints(&self) -> Vec<f64>;

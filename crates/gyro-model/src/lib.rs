@@ -32,6 +32,7 @@ mod force_elements;
 pub mod linalg;
 mod model;
 mod reference_engine;
+mod tape;
 pub mod theory;
 
 pub use design::{

@@ -19,8 +19,10 @@ use crate::linalg::{self, solve_in_place};
 use crate::reference_engine::{
     Chain, EvalInput, EvalOutput, MAX_COORDINATES, body_poses, evaluate_any,
 };
+use crate::tape::{self, Tape, Tr};
 use std::fmt;
 use std::str::FromStr;
+use std::sync::OnceLock;
 
 /// Calls `$m!(N, D)` with the dual-number width N ≥ the chain's coordinate count and the number
 /// D of state directions a Jacobian pass carries, from a few buckets: one instantiation per
@@ -289,6 +291,46 @@ pub struct SpinMotor {
 /// Most spin motors a model compiles (their states live in fixed arrays per evaluation).
 pub const MAX_MOTORS: usize = 4;
 
+/// Most states a model has: rates and coordinates of every coordinate, and the motors' spins.
+const MAX_STATES: usize = 2 * MAX_COORDINATES + MAX_MOTORS;
+
+/// The base's motion as the equations take it: its rotation and rate to the world, each with
+/// its time derivative, and the apparent gravity (world axes).
+type Base<T> = (M3<Jet<T, 1>>, V3<Jet<T, 1>>, [T; 3]);
+
+/// Scalars of a [`Base`] when it is a tape's input (a moving base): R and Ṙ, ω and ω̇, g.
+const BASE_INPUTS: usize = 27;
+
+/// Writes a base's scalars in the tape's input order.
+fn base_scalars<T: Real>(b: &Base<T>, out: &mut [T]) {
+    for i in 0..3 {
+        for j in 0..3 {
+            out[3 * i + j] = b.0.0[i][j].v;
+            out[9 + 3 * i + j] = b.0.0[i][j].d[0];
+        }
+        out[18 + i] = b.1.0[i].v;
+        out[21 + i] = b.1.0[i].d[0];
+        out[24 + i] = b.2[i];
+    }
+}
+
+/// The base read back from a tape's inputs (the inverse of [`base_scalars`]).
+fn base_from_scalars<T: Real>(s: &[T]) -> Base<T> {
+    (
+        M3(std::array::from_fn(|i| {
+            std::array::from_fn(|j| Jet {
+                v: s[3 * i + j],
+                d: [s[9 + 3 * i + j]],
+            })
+        })),
+        V3(std::array::from_fn(|i| Jet {
+            v: s[18 + i],
+            d: [s[21 + i]],
+        })),
+        [s[24], s[25], s[26]],
+    )
+}
+
 /// A design compiled for a scene: immutable; evaluate it with any state.
 #[derive(Clone, Debug)]
 pub struct CompiledModel<M: ShipMotion> {
@@ -323,6 +365,12 @@ pub struct CompiledModel<M: ShipMotion> {
     pub x_equilibrium: Vec<f64>,
     /// Initial state in this model's layout.
     pub x0: Vec<f64>,
+    /// The equations recorded once per fidelity evaluated (`tape`): what `rhs` and `jacobian`
+    /// run. Inputs: the state, then the base's scalars when it moves.
+    tapes: Vec<(Fidelity, Tape)>,
+    /// The running fidelity's Jacobian as tapes of [`tape::JET_WIDTH`] columns each, recorded
+    /// at first use (explicit integrators never ask); `None` inside if not recorded.
+    jacobian_tapes: OnceLock<Option<Vec<Tape>>>,
 }
 
 /// The spin motors a run simulates (none unless the effect is on): one per rotor with a motor.
@@ -457,6 +505,8 @@ impl<M: ShipMotion> CompiledModel<M> {
             linear_a: Vec::new(),
             x_equilibrium: Vec::new(),
             x0: Vec::new(),
+            tapes: Vec::new(),
+            jacobian_tapes: OnceLock::new(),
         };
         let mut x = model.initial_state(&opts.initial)?;
         model.classify_precessional(&x);
@@ -464,7 +514,217 @@ impl<M: ShipMotion> CompiledModel<M> {
             model.slow_start(&mut x);
         }
         model.set_fidelity(opts.fidelity, x)?;
+        model.record_tapes();
         Ok(model)
+    }
+
+    /// Records the equations the run evaluates: its fidelity's, or for a `linear` model on a
+    /// moving base the `full` ones that give its forcing. A tape that does not reproduce the
+    /// generic evaluation at the recording state to the bit is not kept (the generic path then
+    /// runs; `tests/tape.rs` makes sure that never happens for a shipped scene).
+    fn record_tapes(&mut self) {
+        let Some((fidelity, at, inputs)) = self.recording_point() else {
+            return;
+        };
+        let dim = at.len();
+        let tape = tape::on_large_stack(|| {
+            tape::record(&inputs, dim, |inp, out| {
+                let base = if self.stationary.is_some() {
+                    self.base_at(Tr::cst(0.0))
+                } else {
+                    base_from_scalars(&inp[dim..])
+                };
+                macro_rules! go {
+                    ($n:literal, $d:literal) => {
+                        self.rhs_n::<Tr, $n>(fidelity, &base, &inp[..dim], out)
+                    };
+                }
+                by_width!(self.chain.n, go);
+            })
+        });
+        let (mut by_tape, mut generic) = (vec![0.0; dim], vec![0.0; dim]);
+        let ok_tape = tape.eval(&inputs, &mut by_tape);
+        let ok_generic = self.rhs_generic(fidelity, 0.0, &at, &mut generic);
+        let same = by_tape
+            .iter()
+            .zip(&generic)
+            .all(|(a, b)| a.to_bits() == b.to_bits() || a == b);
+        debug_assert!(
+            ok_tape == ok_generic && same,
+            "tape differs from the engine: {by_tape:?} vs {generic:?}"
+        );
+        if ok_tape == ok_generic && same {
+            self.tapes.push((fidelity, tape));
+        }
+    }
+
+    /// The fidelity whose equations are recorded, the state they are recorded at (t = 0) and
+    /// the tape's inputs there; `None` for a `linear` model on a stationary base.
+    fn recording_point(&self) -> Option<(Fidelity, Vec<f64>, Vec<f64>)> {
+        let (fidelity, at) = match self.fidelity {
+            Fidelity::Linear if self.stationary.is_some() => return None,
+            Fidelity::Linear => (Fidelity::Full, self.x_equilibrium.clone()),
+            f => (f, self.x0.clone()),
+        };
+        let dim = self.dim_at(fidelity);
+        let mut inputs = at.clone();
+        if self.stationary.is_none() {
+            inputs.resize(dim + BASE_INPUTS, 0.0);
+            base_scalars(&self.base_at(0.0), &mut inputs[dim..]);
+        }
+        Some((fidelity, at, inputs))
+    }
+
+    /// Records the running fidelity's Jacobian, [`tape::JET_WIDTH`] columns a tape, from the
+    /// engine on dual numbers over the recording scalar. Kept only if it reproduces the
+    /// engine's dual-number Jacobian at the recording state to 1e-12 of its largest entry.
+    fn record_jacobian(&self) -> Option<Vec<Tape>> {
+        if self.fidelity == Fidelity::Linear {
+            return None;
+        }
+        self.tape(self.fidelity)?;
+        let (fidelity, at, inputs) = self.recording_point()?;
+        let dim = at.len();
+        let blocks = tape::on_large_stack(|| self.record_jacobian_blocks(fidelity, dim, &inputs));
+        let mut by_tape = vec![0.0; dim * dim];
+        let mut generic = vec![0.0; dim * dim];
+        if !Self::run_jacobian(&blocks, &inputs, dim, &mut by_tape) {
+            return None;
+        }
+        self.jacobian_at(fidelity, 0.0, &at, &mut generic);
+        let scale = generic.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let worst = by_tape
+            .iter()
+            .zip(&generic)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        debug_assert!(
+            worst <= 1e-12 * scale,
+            "Jacobian tape differs from the engine by {worst:e} (scale {scale:e})"
+        );
+        (worst <= 1e-12 * scale).then_some(blocks)
+    }
+
+    /// The Jacobian's tapes, [`tape::JET_WIDTH`] state directions each.
+    fn record_jacobian_blocks(&self, fidelity: Fidelity, dim: usize, inputs: &[f64]) -> Vec<Tape> {
+        const W: usize = tape::JET_WIDTH;
+        let mut blocks = Vec::new();
+        let mut first = 0;
+        while first < dim {
+            blocks.push(tape::record(inputs, dim * W, |inp, out| {
+                let zero = Jet::<Tr, W>::constant(Tr::cst(0.0));
+                let mut x = [zero; MAX_STATES];
+                for i in 0..dim {
+                    x[i] = if i >= first && i - first < W {
+                        Jet::variable(inp[i], i - first)
+                    } else {
+                        Jet::constant(inp[i])
+                    };
+                }
+                let base = if self.stationary.is_some() {
+                    self.base_at(Jet::<Tr, W>::cst(0.0))
+                } else {
+                    let lifted: [Jet<Tr, W>; BASE_INPUTS] =
+                        std::array::from_fn(|k| Jet::constant(inp[dim + k]));
+                    base_from_scalars(&lifted)
+                };
+                let mut dx = [zero; MAX_STATES];
+                macro_rules! go {
+                    ($n:literal, $d:literal) => {
+                        self.rhs_n::<Jet<Tr, W>, $n>(fidelity, &base, &x[..dim], &mut dx[..dim])
+                    };
+                }
+                by_width!(self.chain.n, go);
+                for row in 0..dim {
+                    out[row * W..(row + 1) * W].copy_from_slice(&dx[row].d);
+                }
+            }));
+            first += W;
+        }
+        blocks
+    }
+
+    /// Runs Jacobian tapes at `inputs` into `jac` (dim×dim). False if a solve is singular.
+    fn run_jacobian(blocks: &[Tape], inputs: &[f64], dim: usize, jac: &mut [f64]) -> bool {
+        const W: usize = tape::JET_WIDTH;
+        let mut out = [0.0; MAX_STATES * W];
+        for (b, block) in blocks.iter().enumerate() {
+            if !block.eval(inputs, &mut out[..dim * W]) {
+                return false;
+            }
+            let first = b * W;
+            for row in 0..dim {
+                for col in first..dim.min(first + W) {
+                    jac[row * dim + col] = out[row * W + col - first];
+                }
+            }
+        }
+        true
+    }
+
+    /// Operations in the Jacobian's tapes (recording them if not yet done), if recorded.
+    pub fn jacobian_tape_len(&self) -> Option<usize> {
+        self.jacobian_tapes
+            .get_or_init(|| self.record_jacobian())
+            .as_ref()
+            .map(|b| b.iter().map(Tape::len).sum())
+    }
+
+    fn tape(&self, fidelity: Fidelity) -> Option<&Tape> {
+        self.tapes
+            .iter()
+            .find(|(f, _)| *f == fidelity)
+            .map(|(_, t)| t)
+    }
+
+    /// Operations in the recorded equations of a fidelity (after folding and dead-code
+    /// removal), if they are recorded.
+    pub fn tape_len(&self, fidelity: Fidelity) -> Option<usize> {
+        self.tape(fidelity).map(Tape::len)
+    }
+
+    /// The tape's inputs at (t, x): x, then the base's scalars if it moves. Returns their count.
+    fn tape_inputs(
+        &self,
+        t: f64,
+        x: &[f64],
+        inputs: &mut [f64; MAX_STATES + BASE_INPUTS],
+    ) -> usize {
+        let dim = x.len();
+        inputs[..dim].copy_from_slice(x);
+        if self.stationary.is_some() {
+            return dim;
+        }
+        base_scalars(&self.base_at(t), &mut inputs[dim..dim + BASE_INPUTS]);
+        dim + BASE_INPUTS
+    }
+
+    /// ẋ by the generic engine (not the recorded tape): what the tape is held to.
+    pub fn rhs_engine(&self, t: f64, x: &[f64], dx: &mut [f64]) -> bool {
+        if self.fidelity == Fidelity::Linear {
+            return self.rhs_linear(t, x, dx);
+        }
+        self.rhs_generic(self.fidelity, t, x, dx)
+    }
+
+    /// The exact Jacobian by the generic engine (not the recorded tape).
+    pub fn jacobian_engine(&self, t: f64, x: &[f64], jac: &mut [f64]) {
+        if self.fidelity == Fidelity::Linear {
+            jac.copy_from_slice(&self.linear_a);
+            return;
+        }
+        self.jacobian_at(self.fidelity, t, x, jac);
+    }
+
+    /// ẋ of a fidelity: by its tape when recorded, by the generic engine otherwise.
+    fn rhs_at(&self, fidelity: Fidelity, t: f64, x: &[f64], dx: &mut [f64]) -> bool {
+        match self.tape(fidelity) {
+            Some(tape) => {
+                let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
+                let n = self.tape_inputs(t, x, &mut inputs);
+                tape.eval(&inputs[..n], dx)
+            }
+            None => self.rhs_generic(fidelity, t, x, dx),
+        }
     }
 
     /// The initial state in the full layout [q; q̇; Ω of each motor]: the equilibrium at rated
@@ -643,7 +903,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         if self.fidelity == Fidelity::Linear {
             return self.rhs_linear(t, x, dx);
         }
-        self.rhs_generic(self.fidelity, t, x, dx)
+        self.rhs_at(self.fidelity, t, x, dx)
     }
 
     fn rhs_linear(&self, t: f64, x: &[f64], dx: &mut [f64]) -> bool {
@@ -655,7 +915,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             }
         } else {
             // The forcing of the scene, taken by the nonlinear model at the equilibrium state.
-            if !self.rhs_generic(Fidelity::Full, t, xe, dx) {
+            if !self.rhs_at(Fidelity::Full, t, xe, dx) {
                 return false;
             }
         }
@@ -669,13 +929,26 @@ impl<M: ShipMotion> CompiledModel<M> {
         true
     }
 
-    /// Exact Jacobian df/dx (row-major dim×dim), by nested dual numbers.
+    /// Exact Jacobian df/dx (row-major dim×dim): forward-mode dual numbers through the
+    /// recorded tape (through the generic engine if none is recorded).
     pub fn jacobian(&self, t: f64, x: &[f64], jac: &mut [f64]) {
         if self.fidelity == Fidelity::Linear {
             jac.copy_from_slice(&self.linear_a);
             return;
         }
-        self.jacobian_at(self.fidelity, t, x, jac);
+        let Some(blocks) = self
+            .jacobian_tapes
+            .get_or_init(|| self.record_jacobian())
+            .as_ref()
+        else {
+            return self.jacobian_at(self.fidelity, t, x, jac);
+        };
+        let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
+        let n = self.tape_inputs(t, x, &mut inputs);
+        if !Self::run_jacobian(blocks, &inputs[..n], x.len(), jac) {
+            // Singular at this state: the engine's own elimination says what it can.
+            self.jacobian_at(self.fidelity, t, x, jac);
+        }
     }
 
     /// Exact Jacobian of the equations at a given fidelity (`full` or `gyroscopic`), by dual
@@ -697,8 +970,9 @@ impl<M: ShipMotion> CompiledModel<M> {
         jac: &mut [f64],
     ) {
         let dim = self.dim_at(fidelity);
-        let mut xj = [Jet::<f64, D>::constant(0.0); 2 * MAX_COORDINATES + MAX_MOTORS];
-        let mut dxj = [Jet::<f64, D>::constant(0.0); 2 * MAX_COORDINATES + MAX_MOTORS];
+        let base = self.base_at(Jet::<f64, D>::constant(t));
+        let mut xj = [Jet::<f64, D>::constant(0.0); MAX_STATES];
+        let mut dxj = [Jet::<f64, D>::constant(0.0); MAX_STATES];
         let mut first = 0;
         while first < dim {
             for i in 0..dim {
@@ -708,7 +982,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                 }
                 xj[i] = Jet { v: x[i], d };
             }
-            self.rhs_n::<Jet<f64, D>, N>(fidelity, Jet::constant(t), &xj[..dim], &mut dxj[..dim]);
+            self.rhs_n::<Jet<f64, D>, N>(fidelity, &base, &xj[..dim], &mut dxj[..dim]);
             for row in 0..dim {
                 for col in first..dim.min(first + D) {
                     jac[row * dim + col] = dxj[row].d[col - first];
@@ -748,21 +1022,26 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
     }
 
-    fn base_at<T: Real>(&self, t: T) -> (M3<Jet<T, 1>>, V3<Jet<T, 1>>, [f64; 3]) {
+    fn base_at<T: Real>(&self, t: T) -> Base<T> {
         match &self.stationary {
             Some(s) => {
                 let lift = |x: Jet<f64, 1>| Jet {
                     v: T::cst(x.v),
                     d: [T::cst(x.d[0])],
                 };
-                (M3(s.r.0.map(|r| r.map(lift))), V3(s.w.0.map(lift)), s.g)
+                (
+                    M3(s.r.0.map(|r| r.map(lift))),
+                    V3(s.w.0.map(lift)),
+                    s.g.map(T::cst),
+                )
             }
             None => {
                 let (r, w) = base_motion(&self.motion, self.chain.ship_root, &self.effects.base, t);
                 (
                     r,
                     w,
-                    apparent_gravity(&self.motion, &self.effects.base, self.pivot_m, t.re()),
+                    apparent_gravity(&self.motion, &self.effects.base, self.pivot_m, t.re())
+                        .map(T::cst),
                 )
             }
         }
@@ -949,9 +1228,10 @@ impl<M: ShipMotion> CompiledModel<M> {
         x: &[T],
         dx: &mut [T],
     ) -> bool {
+        let base = self.base_at(t);
         macro_rules! go {
             ($n:literal, $d:literal) => {
-                self.rhs_n::<T, $n>(fidelity, t, x, dx)
+                self.rhs_n::<T, $n>(fidelity, &base, x, dx)
             };
         }
         by_width!(self.chain.n, go)
@@ -964,7 +1244,7 @@ impl<M: ShipMotion> CompiledModel<M> {
     fn reduced_n<T: Real, const N: usize>(
         &self,
         drop_precessional_inertia: bool,
-        t: T,
+        base: &Base<T>,
         q_ind: &[T],
         qd_ind: &[T],
         u_ind: &[T],
@@ -975,7 +1255,7 @@ impl<M: ShipMotion> CompiledModel<M> {
     ) {
         let n = self.chain.n;
         let ni = self.independent.len();
-        let (r, w, g) = self.base_at(t);
+        let (r, w, g) = base;
         let drop: &[bool] = if drop_precessional_inertia {
             &self.drop_full
         } else {
@@ -988,9 +1268,9 @@ impl<M: ShipMotion> CompiledModel<M> {
                 u: u_ind,
                 drop_quadratic: drop,
                 spin_momentum: &self.spin_momentum,
-                world_from_base: &r,
-                base_rate: &w,
-                gravity: g,
+                world_from_base: r,
+                base_rate: w,
+                gravity: *g,
             };
             body_axes::evaluate::<T, N>(&self.body_axes, &inp, spins, m_red, k_red, c_red);
             return;
@@ -1007,9 +1287,9 @@ impl<M: ShipMotion> CompiledModel<M> {
             u: &u[..n],
             drop_quadratic: drop,
             spin_momentum: &self.spin_momentum,
-            world_from_base: &r,
-            base_rate: &w,
-            gravity: g,
+            world_from_base: r,
+            base_rate: w,
+            gravity: *g,
         };
         let mut m = [[T::zero(); N]; N];
         let mut k = [[T::zero(); N]; N];
@@ -1038,7 +1318,7 @@ impl<M: ShipMotion> CompiledModel<M> {
     /// by [`body_axes::evaluate_rates`] (K is never formed). Servo relations as in [`Self::reduced_n`].
     fn reduced_rates_n<T: Real, const N: usize>(
         &self,
-        t: T,
+        base: &Base<T>,
         q_ind: &[T],
         qd_ind: &[T],
         spins: &[(usize, T, T)],
@@ -1047,7 +1327,7 @@ impl<M: ShipMotion> CompiledModel<M> {
     ) {
         let n = self.chain.n;
         let ni = self.independent.len();
-        let (rb, w, g) = self.base_at(t);
+        let (rb, w, g) = base;
         if self.no_servo {
             let inp = EvalInput {
                 q: q_ind,
@@ -1055,9 +1335,9 @@ impl<M: ShipMotion> CompiledModel<M> {
                 u: qd_ind,
                 drop_quadratic: &[],
                 spin_momentum: &self.spin_momentum,
-                world_from_base: &rb,
-                base_rate: &w,
-                gravity: g,
+                world_from_base: rb,
+                base_rate: w,
+                gravity: *g,
             };
             body_axes::evaluate_rates::<T, N>(&self.body_axes, &inp, spins, m_red, r_red);
             return;
@@ -1072,9 +1352,9 @@ impl<M: ShipMotion> CompiledModel<M> {
             u: &qd[..n],
             drop_quadratic: &[],
             spin_momentum: &self.spin_momentum,
-            world_from_base: &rb,
-            base_rate: &w,
-            gravity: g,
+            world_from_base: rb,
+            base_rate: w,
+            gravity: *g,
         };
         let mut m = [[T::zero(); N]; N];
         let mut r = [T::zero(); N];
@@ -1099,7 +1379,7 @@ impl<M: ShipMotion> CompiledModel<M> {
     fn rhs_n<T: Real, const N: usize>(
         &self,
         fidelity: Fidelity,
-        t: T,
+        base: &Base<T>,
         x: &[T],
         dx: &mut [T],
     ) -> bool {
@@ -1133,7 +1413,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                 }
                 self.reduced_n::<T, N>(
                     true,
-                    t,
+                    base,
                     q,
                     &qd[..ni],
                     &qd[..ni],
@@ -1187,7 +1467,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             _ => {
                 let qd = &x[ni..2 * ni];
                 let mut r = [T::zero(); N];
-                self.reduced_rates_n::<T, N>(t, q, qd, spins, &mut m, &mut r);
+                self.reduced_rates_n::<T, N>(base, q, qd, spins, &mut m, &mut r);
                 // Without servo relations M is the chain's own mass matrix: symmetric
                 // positive definite, so LDLᵀ (about half the cost of pivoted LU here).
                 let solved = (self.no_servo && linalg::solve_spd_nested(&m, &mut r, ni))
@@ -1220,7 +1500,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         let mut c = [0.0; N];
         self.reduced_n::<f64, N>(
             false,
-            0.0,
+            &self.base_at(0.0),
             q,
             &zero[..ni],
             &zero[..ni],
@@ -1265,7 +1545,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             let mut c = [Jet::<f64, D>::constant(0.0); N];
             self.reduced_n::<Jet<f64, D>, N>(
                 false,
-                Jet::constant(0.0),
+                &self.base_at(Jet::constant(0.0)),
                 &qj[..ni],
                 &zj[..ni],
                 &zj[..ni],

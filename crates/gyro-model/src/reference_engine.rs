@@ -108,7 +108,8 @@ pub struct EvalInput<'a, T: Real> {
     pub spin_momentum: &'a [f64],
     pub world_from_base: &'a M3<Jet<T, 1>>,
     pub base_rate: &'a V3<Jet<T, 1>>,
-    pub gravity: [f64; 3],
+    /// Apparent gravity, world axes (an input like the base motion, so a tape can take it).
+    pub gravity: [T; 3],
 }
 
 /// Outputs: M (n×n, row-major), K (n×n), c (n), and the energies [T₂ (at `u`), T₀, V], J.
@@ -205,7 +206,7 @@ pub fn evaluate<T: Real, const N: usize>(
         }
         t2 += (v_u.dot(&v_u) * m + w_u.dot(&h_u)) * 0.5;
         t0 += (v0.dot(&v0) * m + w0.dot(&iw0)) * 0.5 + spin_term;
-        v -= V3::from_f64(inp.gravity).dot(&c_w) * m;
+        v -= V3(inp.gravity.map(Jet::constant)).dot(&c_w) * m;
         // Mass matrix from the real parts of the Jacobians.
         let rr = M3(r_b.0.map(|row| row.map(|x| x.v)));
         let ibr = M3::<T>::from_f64(body.inertia);

@@ -1,7 +1,8 @@
-//! CPU cost of one right-hand side and one exact Jacobian, by the body-axes engine the model
-//! uses (`rhs`, `jacobian`) and by the world-axes reference engine it replaced (`rhs_reference`,
-//! its Jacobian by column-by-column duals), per shipped scene and fidelity, at the scene's
-//! initial state.
+//! CPU cost of one right-hand side and one exact Jacobian, per shipped scene and fidelity, at
+//! the scene's initial state, three ways in one run: the recorded tape the model runs (`rhs`,
+//! `jacobian`), the generic body-axes engine it is recorded from (`engine rhs`, `engine
+//! jacobian`: what `rhs` cost before the tape), and the world-axes reference engine
+//! (`reference rhs`, its Jacobian by column-by-column duals).
 //!
 //! Measured in this thread's CPU time (`/proc/thread-self/schedstat`, nanoseconds), not
 //! criterion's wall clock, so that a machine shared with other builds gives the figures of an
@@ -117,6 +118,7 @@ fn bench_engines(c: &mut Criterion<ThreadCpu>) {
         "rolling-intercardinal",
         "run-north-30kn",
         "foucault-azimuth-45n",
+        "three-gyro-harbour-50n",
     ] {
         for fidelity in [Fidelity::Full, Fidelity::Gyroscopic, Fidelity::Linear] {
             let ov = SceneOverrides {
@@ -147,6 +149,15 @@ fn bench_engines(c: &mut Criterion<ThreadCpu>) {
             if fidelity == Fidelity::Linear {
                 continue; // the reference engine has no linear form
             }
+            group.bench_function(format!("{label}/engine rhs"), |b| {
+                b.iter(|| black_box(m.rhs_engine(black_box(1.0), black_box(&x), &mut dx)))
+            });
+            group.bench_function(format!("{label}/engine jacobian"), |b| {
+                b.iter(|| {
+                    m.jacobian_engine(black_box(1.0), black_box(&x), &mut jac);
+                    black_box(&jac);
+                })
+            });
             group.bench_function(format!("{label}/reference rhs"), |b| {
                 b.iter(|| {
                     black_box(m.rhs_reference(fidelity, black_box(1.0), black_box(&x), &mut dx))

@@ -87,3 +87,39 @@ fn allocations_do_not_grow_with_steps() {
         assert!(short < 40, "{method}: {short} allocations");
     }
 }
+
+/// The compiled model's right-hand side and Jacobian (its recorded tapes) allocate nothing once
+/// warm: the tapes are recorded and the evaluation buffer sized by the first calls.
+#[test]
+fn model_evaluation_does_not_allocate_once_warm() {
+    use gyro_sim::{Scene, SceneOverrides, Simulation};
+    for (scene, fidelity) in [
+        ("harbour-50n", "gyroscopic"),
+        ("harbour-50n", "full"),
+        ("rolling-intercardinal", "gyroscopic"),
+        ("three-gyro-harbour-50n", "gyroscopic"),
+    ] {
+        let ov = SceneOverrides {
+            fidelity: Some(fidelity.parse().expect("fidelity")),
+            ..Default::default()
+        };
+        let sim = Simulation::new(&Scene::load(scene, &ov).expect("scene")).expect("compiles");
+        let m = &sim.model;
+        let x = m.x0.clone();
+        let mut dx = vec![0.0; x.len()];
+        let mut jac = vec![0.0; x.len() * x.len()];
+        m.rhs(0.0, &x, &mut dx);
+        m.jacobian(0.0, &x, &mut jac);
+        let before = ALLOCATIONS.with(Cell::get);
+        for k in 0..200 {
+            let t = k as f64 * 0.37;
+            assert!(m.rhs(t, &x, &mut dx));
+            m.jacobian(t, &x, &mut jac);
+        }
+        let made = ALLOCATIONS.with(Cell::get) - before;
+        assert_eq!(
+            made, 0,
+            "{scene}/{fidelity}: {made} allocations in 200 evaluations"
+        );
+    }
+}

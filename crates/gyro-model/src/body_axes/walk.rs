@@ -67,11 +67,7 @@ impl<T: Real, const N: usize, const L: usize> Carried<T, N, L> {
         let r = inp.world_from_base;
         let w_base = r.tmul_v(inp.base_rate);
         let moving = w_base.0.iter().any(|x| x.d[0] != T::zero());
-        let g_world = V3([
-            T::cst(inp.gravity[0]),
-            T::cst(inp.gravity[1]),
-            T::cst(inp.gravity[2]),
-        ]);
+        let g_world = V3(inp.gravity);
         let g_base = M3(r.0.map(|row| row.map(|x| x.v))).tmul_v(&g_world);
         let st = Carried {
             w: V3(w_base.0.map(|x| Jet::<T, N>::constant(x.v))),

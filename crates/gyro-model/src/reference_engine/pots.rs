@@ -156,7 +156,7 @@ pub(super) fn carried_mass<T: Real, const N: usize>(
 ) {
     let dropped = |i: usize| inp.drop_quadratic.get(i).copied().unwrap_or(false);
     let vz = V3::<Jet<T, N>>::zero();
-    let g = V3::<Jet<T, N>>::from_f64(inp.gravity);
+    let g = V3(inp.gravity.map(Jet::<T, N>::constant));
     let x = k.p.add(&k.r.mul_v(r_body));
     let jv: [V3<Jet<T, N>>; N] = std::array::from_fn(|i| {
         if i < n {

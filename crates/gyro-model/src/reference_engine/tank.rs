@@ -61,7 +61,7 @@ pub(super) fn add<T: Real, const N: usize>(
         (x + c.free_surface_m4[0], y + c.free_surface_m4[1])
     });
     if ix != 0.0 || iy != 0.0 {
-        let gc = k.r.tmul_v(&V3::from_f64(inp.gravity));
+        let gc = k.r.tmul_v(&V3(inp.gravity.map(Jet::constant)));
         let norm = gc.dot(&gc).sqrt();
         let wedge = (gc.0[1] * gc.0[1] * ix + gc.0[0] * gc.0[0] * iy) / norm;
         *out.v -= wedge * (0.5 * rho);

@@ -1,0 +1,574 @@
+//! The compiled equations: the right-hand side of one compiled model recorded once as a
+//! straight-line program (a tape) and evaluated from it at every step.
+//!
+//! The engine is generic over [`Real`]; run on the recording scalar [`Tr`] it writes down every
+//! arithmetic operation instead of doing it. Recording folds what a scene fixes (constants,
+//! multiplications by 0 and 1, a stationary base's rotation and gravity), shares common
+//! subexpressions, and drops what no output uses; what is left is the model's own equations with
+//! none of the chain walk's bookkeeping. The exact Jacobian is recorded the same way, from the
+//! engine run on dual numbers over the recording scalar, [`JET_WIDTH`] state directions a tape:
+//! derivatives that are structurally zero fold away, so the Jacobian tape holds only the
+//! chain-rule terms that can be nonzero, and a solve's derivative is recorded as solves with the
+//! values' matrix (`Jet::record_solve`). Both run on plain `f64`.
+//!
+//! Exact, not approximate: the tape performs the same IEEE operations on the same operands in
+//! the same order as the generic engine (folding evaluates them once, at recording; `x·1`,
+//! `x + 0` and `0·x` are identities up to the sign of zero), so its results equal the engine's
+//! to the last bit; `tests/tape.rs` holds it to that on every shipped scene.
+//!
+//! Straight-line is possible because the engine branches on values in one place only: the
+//! pivot search of its dense solves. A solve is therefore recorded as one operation (matrix and
+//! right-hand side in, solution out) and performed at evaluation by the same elimination.
+//! Structural-zero tests (`x != 0` to skip a term) compare nodes: only a folded constant zero
+//! is zero, so the tape keeps every term that is not zero for every state.
+//!
+//! Recording uses a thread-local recorder (a [`Tr`] is a node number); evaluation uses a
+//! thread-local slot buffer that grows once, so evaluating allocates nothing after the first
+//! call on a thread.
+
+use crate::dual::Real;
+use crate::linalg;
+use crate::reference_engine::MAX_COORDINATES;
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// One recorded operation. Operands are node numbers while recording and slot numbers in a
+/// finished [`Tape`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Op {
+    Const(f64),
+    Input(u32),
+    Add(u32, u32),
+    Sub(u32, u32),
+    Mul(u32, u32),
+    Div(u32, u32),
+    Neg(u32),
+    Sin(u32),
+    Cos(u32),
+    Sqrt(u32),
+    Atan2(u32, u32),
+    Asin(u32),
+    /// Component `k` of the solution of dense solve `s` (recording only; a tape has one
+    /// [`Op::Solve`] writing all components to consecutive slots).
+    SolveOut(u32, u32),
+    /// Dense solve `s`: writes its n solution components to this slot and the n − 1 after.
+    Solve(u32),
+}
+
+/// A recorded dense solve A x = b of the leading n×n block.
+#[derive(Clone, Debug)]
+struct SolveSpec {
+    n: usize,
+    /// Symmetric positive definite first (LDLᵀ), pivoted elimination if that fails: what the
+    /// engine does with a chain's own mass matrix.
+    spd_first: bool,
+    /// A row-major (n×n), then b (n): node or slot numbers.
+    a: Vec<u32>,
+    b: Vec<u32>,
+}
+
+#[derive(Default)]
+struct Recorder {
+    ops: Vec<Op>,
+    values: Vec<f64>,
+    shared: HashMap<OpKey, u32>,
+    solves: Vec<SolveSpec>,
+}
+
+/// Hashable identity of an operation (constants by their bits).
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+struct OpKey(u8, u64, u32);
+
+impl OpKey {
+    fn of(op: Op) -> Option<OpKey> {
+        Some(match op {
+            Op::Const(c) => OpKey(0, c.to_bits(), 0),
+            Op::Input(i) => OpKey(1, i as u64, 0),
+            // Addition and multiplication are commutative in IEEE arithmetic: one key.
+            Op::Add(a, b) => OpKey(2, a.min(b) as u64, a.max(b)),
+            Op::Sub(a, b) => OpKey(3, a as u64, b),
+            Op::Mul(a, b) => OpKey(4, a.min(b) as u64, a.max(b)),
+            Op::Div(a, b) => OpKey(5, a as u64, b),
+            Op::Neg(a) => OpKey(6, a as u64, 0),
+            Op::Sin(a) => OpKey(7, a as u64, 0),
+            Op::Cos(a) => OpKey(8, a as u64, 0),
+            Op::Sqrt(a) => OpKey(9, a as u64, 0),
+            Op::Atan2(a, b) => OpKey(10, a as u64, b),
+            Op::Asin(a) => OpKey(11, a as u64, 0),
+            Op::SolveOut(..) | Op::Solve(_) => return None,
+        })
+    }
+}
+
+thread_local! {
+    static RECORDER: RefCell<Option<Recorder>> = const { RefCell::new(None) };
+    static SLOTS: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
+}
+
+/// State directions one Jacobian tape carries (directions that are structurally zero fold
+/// away while recording, so a narrower model pays nothing for the width).
+pub(crate) const JET_WIDTH: usize = 8;
+
+fn with_recorder<R>(f: impl FnOnce(&mut Recorder) -> R) -> R {
+    RECORDER.with(|r| {
+        f(r.borrow_mut()
+            .as_mut()
+            .expect("a recording scalar used outside tape::record"))
+    })
+}
+
+impl Recorder {
+    fn is_const(&self, id: u32) -> Option<f64> {
+        match self.ops[id as usize] {
+            Op::Const(c) => Some(c),
+            _ => None,
+        }
+    }
+
+    /// Appends `op` (value `v`) unless an equal operation exists.
+    fn push(&mut self, op: Op, v: f64) -> Tr {
+        if let Some(key) = OpKey::of(op)
+            && let Some(&id) = self.shared.get(&key)
+        {
+            return Tr {
+                id,
+                v: self.values[id as usize],
+            };
+        }
+        let id = self.ops.len() as u32;
+        self.ops.push(op);
+        self.values.push(v);
+        if let Some(key) = OpKey::of(op) {
+            self.shared.insert(key, id);
+        }
+        Tr { id, v }
+    }
+
+    fn constant(&mut self, c: f64) -> Tr {
+        self.push(Op::Const(c), c)
+    }
+
+    /// A binary operation, folded when both operands are constants or one is an identity.
+    fn binary(&mut self, op: fn(u32, u32) -> Op, a: Tr, b: Tr, v: f64) -> Tr {
+        let (ca, cb) = (self.is_const(a.id), self.is_const(b.id));
+        if ca.is_some() && cb.is_some() {
+            return self.constant(v);
+        }
+        let o = op(a.id, b.id);
+        match o {
+            Op::Add(..) if cb == Some(0.0) => return a,
+            Op::Add(..) if ca == Some(0.0) => return b,
+            Op::Sub(..) if cb == Some(0.0) => return a,
+            Op::Sub(..) if ca == Some(0.0) => return self.unary(Op::Neg, b, v),
+            Op::Sub(..) if a.id == b.id => return self.constant(v),
+            Op::Mul(..) if ca == Some(0.0) || cb == Some(0.0) => return self.constant(0.0),
+            Op::Mul(..) if cb == Some(1.0) => return a,
+            Op::Mul(..) if ca == Some(1.0) => return b,
+            Op::Mul(..) if cb == Some(-1.0) => return self.unary(Op::Neg, a, v),
+            Op::Mul(..) if ca == Some(-1.0) => return self.unary(Op::Neg, b, v),
+            Op::Div(..) if cb == Some(1.0) => return a,
+            Op::Div(..) if ca == Some(0.0) => return self.constant(0.0),
+            _ => {}
+        }
+        self.push(o, v)
+    }
+
+    fn unary(&mut self, op: fn(u32) -> Op, a: Tr, v: f64) -> Tr {
+        if self.is_const(a.id).is_some() {
+            return self.constant(v);
+        }
+        let o = op(a.id);
+        if let (Op::Neg(_), Op::Neg(inner)) = (o, self.ops[a.id as usize]) {
+            return Tr {
+                id: inner,
+                v: self.values[inner as usize],
+            };
+        }
+        self.push(o, v)
+    }
+}
+
+/// The recording scalar: a node of the tape being recorded, with its value at the recording
+/// state (the engine may read values; only the solves' pivoting does, and solves are recorded
+/// whole).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Tr {
+    id: u32,
+    v: f64,
+}
+
+/// Nodes are equal when they are the same node: `x != 0` holds unless x is folded to zero.
+impl PartialEq for Tr {
+    fn eq(&self, o: &Self) -> bool {
+        self.id == o.id
+    }
+}
+
+macro_rules! binary_ops {
+    ($($tr:ident $f:ident $tra:ident $fa:ident $op:ident $sym:tt;)*) => {$(
+        impl $tr for Tr {
+            type Output = Tr;
+            fn $f(self, o: Tr) -> Tr {
+                with_recorder(|r| r.binary(Op::$op, self, o, self.v $sym o.v))
+            }
+        }
+        impl $tr<f64> for Tr {
+            type Output = Tr;
+            fn $f(self, o: f64) -> Tr {
+                with_recorder(|r| {
+                    let c = r.constant(o);
+                    r.binary(Op::$op, self, c, self.v $sym o)
+                })
+            }
+        }
+        impl $tra for Tr {
+            fn $fa(&mut self, o: Tr) {
+                *self = *self $sym o;
+            }
+        }
+    )*};
+}
+
+binary_ops! {
+    Add add AddAssign add_assign Add +;
+    Sub sub SubAssign sub_assign Sub -;
+    Mul mul MulAssign mul_assign Mul *;
+}
+
+impl Div for Tr {
+    type Output = Tr;
+    fn div(self, o: Tr) -> Tr {
+        with_recorder(|r| r.binary(Op::Div, self, o, self.v / o.v))
+    }
+}
+
+impl Div<f64> for Tr {
+    type Output = Tr;
+    fn div(self, o: f64) -> Tr {
+        with_recorder(|r| {
+            let c = r.constant(o);
+            r.binary(Op::Div, self, c, self.v / o)
+        })
+    }
+}
+
+impl Neg for Tr {
+    type Output = Tr;
+    fn neg(self) -> Tr {
+        with_recorder(|r| r.unary(Op::Neg, self, -self.v))
+    }
+}
+
+impl Real for Tr {
+    fn cst(x: f64) -> Self {
+        with_recorder(|r| r.constant(x))
+    }
+    fn re(&self) -> f64 {
+        self.v
+    }
+    fn sin_cos(self) -> (Self, Self) {
+        let (s, c) = self.v.sin_cos();
+        with_recorder(|r| (r.unary(Op::Sin, self, s), r.unary(Op::Cos, self, c)))
+    }
+    fn sqrt(self) -> Self {
+        with_recorder(|r| r.unary(Op::Sqrt, self, self.v.sqrt()))
+    }
+    fn atan2(self, x: Self) -> Self {
+        with_recorder(|r| r.binary(Op::Atan2, self, x, self.v.atan2(x.v)))
+    }
+    fn asin(self) -> Self {
+        with_recorder(|r| r.unary(Op::Asin, self, self.v.asin()))
+    }
+
+    fn record_solve<const N: usize>(
+        a: &[[Self; N]; N],
+        b: &mut [Self; N],
+        n: usize,
+        spd_first: bool,
+    ) -> Option<bool> {
+        // The values at the recording state, by the same solves the tape will run.
+        let mut av = [[0.0; N]; N];
+        let mut bv = [0.0; N];
+        for i in 0..n {
+            bv[i] = b[i].v;
+            for j in 0..n {
+                av[i][j] = a[i][j].v;
+            }
+        }
+        solve_values(&mut av, &mut bv, n, spd_first);
+        with_recorder(|r| {
+            let s = r.solves.len() as u32;
+            r.solves.push(SolveSpec {
+                n,
+                spd_first,
+                a: (0..n * n).map(|k| a[k / n][k % n].id).collect(),
+                b: (0..n).map(|i| b[i].id).collect(),
+            });
+            for k in 0..n {
+                b[k] = r.push(Op::SolveOut(s, k as u32), bv[k]);
+            }
+        });
+        Some(true)
+    }
+}
+
+/// The engine's dense solve on any scalar (LDLᵀ first when asked, as the engine does for a
+/// mass matrix, pivoted elimination otherwise or if that fails). False if singular.
+fn solve_values<T: Real, const N: usize>(
+    a: &mut [[T; N]; N],
+    b: &mut [T; N],
+    n: usize,
+    spd_first: bool,
+) -> bool {
+    (spd_first && linalg::solve_spd_nested(a, b, n)) || linalg::solve_nested(a, b, n)
+}
+
+/// A recorded right-hand side (or any function of `n_inputs` scalars), ready to evaluate.
+#[derive(Clone, Debug)]
+pub(crate) struct Tape {
+    /// Values of the first slots.
+    consts: Vec<f64>,
+    n_inputs: usize,
+    /// One per slot after the constants and inputs (a solve fills n slots; the n − 1 after its
+    /// own hold no operation and are skipped by the count in `SolveSpec`).
+    ops: Vec<Op>,
+    solves: Vec<SolveSpec>,
+    /// Slots of the outputs.
+    outputs: Vec<u32>,
+    n_slots: usize,
+}
+
+/// Runs `f` (a recording) on a thread with a large stack: the engine keeps its dual-number
+/// matrices on the stack, and over the recording scalar (16 bytes, and 9 of them in a Jacobian
+/// direction block) they outgrow the 2 MB a spawned thread gets by default.
+pub(crate) fn on_large_stack<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    std::thread::scope(|s| {
+        std::thread::Builder::new()
+            .name("tape recording".into())
+            .stack_size(256 << 20)
+            .spawn_scoped(s, f)
+            .expect("a thread for tape recording")
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e))
+    })
+}
+
+/// Records `f` on `n_inputs` recording scalars taking the values `at` (used only to keep the
+/// recording's own values meaningful) and returns its tape. `f` writes its outputs and returns
+/// false if it cannot be evaluated at `at`.
+pub(crate) fn record(at: &[f64], n_outputs: usize, f: impl FnOnce(&[Tr], &mut [Tr])) -> Tape {
+    let previous = RECORDER.with(|r| r.borrow_mut().replace(Recorder::default()));
+    assert!(previous.is_none(), "tape recordings do not nest");
+    let inputs: Vec<Tr> = with_recorder(|r| {
+        at.iter()
+            .enumerate()
+            .map(|(i, &v)| r.push(Op::Input(i as u32), v))
+            .collect()
+    });
+    let zero = with_recorder(|r| r.constant(0.0));
+    let mut outputs = vec![zero; n_outputs];
+    f(&inputs, &mut outputs);
+    let rec = RECORDER
+        .with(|r| r.borrow_mut().take())
+        .expect("the recorder is still installed");
+    compact(rec, at.len(), &outputs)
+}
+
+/// Drops dead nodes and numbers slots: constants, inputs, then operations in recording order.
+fn compact(rec: Recorder, n_inputs: usize, outputs: &[Tr]) -> Tape {
+    let n = rec.ops.len();
+    let mut live = vec![false; n];
+    let mut solve_live = vec![false; rec.solves.len()];
+    for o in outputs {
+        live[o.id as usize] = true;
+    }
+    for id in (0..n).rev() {
+        if !live[id] {
+            continue;
+        }
+        let mut mark = |x: u32| live[x as usize] = true;
+        match rec.ops[id] {
+            Op::Const(_) | Op::Input(_) | Op::Solve(_) => {}
+            Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
+                mark(a);
+                mark(b);
+            }
+            Op::Neg(a) | Op::Sin(a) | Op::Cos(a) | Op::Sqrt(a) | Op::Asin(a) => mark(a),
+            Op::SolveOut(s, _) => {
+                if !solve_live[s as usize] {
+                    solve_live[s as usize] = true;
+                    let spec = &rec.solves[s as usize];
+                    for &x in spec.a.iter().chain(&spec.b) {
+                        live[x as usize] = true;
+                    }
+                }
+            }
+        }
+    }
+    // Every component of a live solve gets its slot (the solve writes them all).
+    for id in 0..n {
+        if let Op::SolveOut(s, _) = rec.ops[id]
+            && solve_live[s as usize]
+        {
+            live[id] = true;
+        }
+    }
+    let mut slot = vec![u32::MAX; n];
+    let mut consts = Vec::new();
+    for id in 0..n {
+        if let (true, Op::Const(c)) = (live[id], rec.ops[id]) {
+            slot[id] = consts.len() as u32;
+            consts.push(c);
+        }
+    }
+    let base = consts.len();
+    for id in 0..n {
+        if let Op::Input(i) = rec.ops[id] {
+            slot[id] = (base + i as usize) as u32;
+        }
+    }
+    let mut next = base + n_inputs;
+    let mut ops = Vec::new();
+    let mut solves = Vec::new();
+    let mut solve_slot = vec![u32::MAX; rec.solves.len()];
+    for id in 0..n {
+        if !live[id] {
+            continue;
+        }
+        let op = rec.ops[id];
+        let s = |x: u32| slot[x as usize];
+        let mapped = match op {
+            Op::Const(_) | Op::Input(_) | Op::Solve(_) => continue,
+            Op::Add(a, b) => Op::Add(s(a), s(b)),
+            Op::Sub(a, b) => Op::Sub(s(a), s(b)),
+            Op::Mul(a, b) => Op::Mul(s(a), s(b)),
+            Op::Div(a, b) => Op::Div(s(a), s(b)),
+            Op::Atan2(a, b) => Op::Atan2(s(a), s(b)),
+            Op::Neg(a) => Op::Neg(s(a)),
+            Op::Sin(a) => Op::Sin(s(a)),
+            Op::Cos(a) => Op::Cos(s(a)),
+            Op::Sqrt(a) => Op::Sqrt(s(a)),
+            Op::Asin(a) => Op::Asin(s(a)),
+            Op::SolveOut(sv, k) => {
+                if k == 0 {
+                    let spec = &rec.solves[sv as usize];
+                    solve_slot[sv as usize] = next as u32;
+                    solves.push(SolveSpec {
+                        n: spec.n,
+                        spd_first: spec.spd_first,
+                        a: spec.a.iter().map(|&x| s(x)).collect(),
+                        b: spec.b.iter().map(|&x| s(x)).collect(),
+                    });
+                    ops.push(Op::Solve(solves.len() as u32 - 1));
+                    next += spec.n;
+                }
+                slot[id] = solve_slot[sv as usize] + k;
+                continue;
+            }
+        };
+        slot[id] = next as u32;
+        ops.push(mapped);
+        next += 1;
+    }
+    Tape {
+        consts,
+        n_inputs,
+        ops,
+        solves,
+        outputs: outputs.iter().map(|o| slot[o.id as usize]).collect(),
+        n_slots: next,
+    }
+}
+
+impl Tape {
+    /// Operations after folding and dead-code removal (a solve counts one).
+    pub(crate) fn len(&self) -> usize {
+        self.ops.len()
+    }
+
+    /// Evaluates the tape at `inputs` into `out`, in `slots` (resized as needed). False if a
+    /// solve is singular there.
+    fn run<T: Real>(&self, slots: &mut Vec<T>, inputs: &[T], out: &mut [T]) -> bool {
+        debug_assert_eq!(inputs.len(), self.n_inputs);
+        slots.resize(self.n_slots, T::zero());
+        let nc = self.consts.len();
+        for (s, &c) in slots.iter_mut().zip(&self.consts) {
+            *s = T::cst(c);
+        }
+        slots[nc..nc + self.n_inputs].copy_from_slice(inputs);
+        let mut k = nc + self.n_inputs;
+        for op in &self.ops {
+            let s = &*slots;
+            let v = match *op {
+                Op::Add(a, b) => s[a as usize] + s[b as usize],
+                Op::Sub(a, b) => s[a as usize] - s[b as usize],
+                Op::Mul(a, b) => s[a as usize] * s[b as usize],
+                Op::Div(a, b) => s[a as usize] / s[b as usize],
+                Op::Neg(a) => -s[a as usize],
+                Op::Sin(a) => s[a as usize].sin(),
+                Op::Cos(a) => s[a as usize].cos(),
+                Op::Sqrt(a) => s[a as usize].sqrt(),
+                Op::Atan2(a, b) => s[a as usize].atan2(s[b as usize]),
+                Op::Asin(a) => s[a as usize].asin(),
+                Op::Solve(i) => {
+                    let spec = &self.solves[i as usize];
+                    if !self.solve(spec, slots, k) {
+                        return false;
+                    }
+                    k += spec.n;
+                    continue;
+                }
+                Op::Const(_) | Op::Input(_) | Op::SolveOut(..) => unreachable!("not in a tape"),
+            };
+            slots[k] = v;
+            k += 1;
+        }
+        for (o, &s) in out.iter_mut().zip(&self.outputs) {
+            *o = slots[s as usize];
+        }
+        true
+    }
+
+    /// A solve on arrays just large enough (zeroing a 15×15 array of dual numbers would cost
+    /// more than a small solve itself).
+    fn solve<T: Real>(&self, spec: &SolveSpec, slots: &mut [T], at: usize) -> bool {
+        match spec.n {
+            1 => self.solve_n::<T, 1>(spec, slots, at),
+            2 => self.solve_n::<T, 2>(spec, slots, at),
+            3 => self.solve_n::<T, 3>(spec, slots, at),
+            4 => self.solve_n::<T, 4>(spec, slots, at),
+            5..=6 => self.solve_n::<T, 6>(spec, slots, at),
+            7..=8 => self.solve_n::<T, 8>(spec, slots, at),
+            9..=11 => self.solve_n::<T, 11>(spec, slots, at),
+            _ => self.solve_n::<T, MAX_COORDINATES>(spec, slots, at),
+        }
+    }
+
+    fn solve_n<T: Real, const N: usize>(
+        &self,
+        spec: &SolveSpec,
+        slots: &mut [T],
+        at: usize,
+    ) -> bool {
+        let n = spec.n;
+        let mut a = [[T::zero(); N]; N];
+        let mut b = [T::zero(); N];
+        for i in 0..n {
+            b[i] = slots[spec.b[i] as usize];
+            for j in 0..n {
+                a[i][j] = slots[spec.a[i * n + j] as usize];
+            }
+        }
+        if !solve_values(&mut a, &mut b, n, spec.spd_first) {
+            return false;
+        }
+        slots[at..at + n].copy_from_slice(&b[..n]);
+        true
+    }
+
+    /// The outputs at `inputs` (f64). False if a solve is singular there.
+    pub(crate) fn eval(&self, inputs: &[f64], out: &mut [f64]) -> bool {
+        SLOTS.with(|s| self.run(&mut s.borrow_mut(), inputs, out))
+    }
+}
