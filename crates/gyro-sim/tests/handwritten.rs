@@ -5,10 +5,10 @@
 //! more, rates well beyond the motion's). Each physical term of the hand-written Anschütz, and
 //! Villarceau's δ, is shown to matter far above the tolerance: a missing term fails the test.
 
+use gyro_model::Fidelity;
 use gyro_sim::accuracy::foucault_release_scene;
 use gyro_sim::accuracy::handwritten::{Anschutz1906, Foucault44Bis};
 use gyro_sim::{Scene, SceneOverrides, Simulation};
-use gyro_model::Fidelity;
 
 /// Deterministic pseudo-random numbers in [−1, 1].
 struct Lcg(u64);

@@ -25,6 +25,10 @@
 //! The engine-over-hand-written cost ratio is measured by
 //! `cargo bench -p gyro-sim --bench handwritten`.
 
+// Small fixed-size kernels index parallel arrays with one loop variable; a NaN-rejecting test is
+// written `!(x > 0.0)` on purpose.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::run::Simulation;
 use crate::solvers::OdeSystem;
 use gyro_model::constants::EARTH_RATE_RAD_PER_S;
@@ -257,7 +261,12 @@ impl Anschutz1906 {
         };
         let coord = |n: &str| d.coordinate_index(n).ok_or(format!("no coordinate {n}"));
         if d.root != Root::Earth
-            || [coord("zeta")?, coord("theta")?, coord("lambda")?, coord("alpha")?] != [0, 1, 2, 3]
+            || [
+                coord("zeta")?,
+                coord("theta")?,
+                coord("lambda")?,
+                coord("alpha")?,
+            ] != [0, 1, 2, 3]
             || d.coordinates.len() != 4
             || !d.pots.is_empty()
             || !d.tanks.is_empty()
@@ -283,7 +292,9 @@ impl Anschutz1906 {
             || vane.hinge.as_ref().map(|h| h.axis) != Some(1)
             || float.hinge.as_ref().map(|h| h.axis) != Some(0)
         {
-            return Err("not built like anschutz-1906 (float, rotor on it, vane hinged on y)".into());
+            return Err(
+                "not built like anschutz-1906 (float, rotor on it, vane hinged on y)".into(),
+            );
         }
         for (i, b) in d.bodies.iter().enumerate() {
             if i != fi && i != ri && i != vi && (b.mass_kg != 0.0 || b.rotor.is_some()) {
@@ -319,8 +330,7 @@ impl Anschutz1906 {
                     ..
                 } if *body == fi => {
                     for k in 0..3 {
-                        if point[k].coordinates().iter().any(|&i| i != 3) || !point[k].is_linear()
-                        {
+                        if point[k].coordinates().iter().any(|&i| i != 3) || !point[k].is_linear() {
                             return Err("the jets' point must be linear in α only".into());
                         }
                         jet_force[k] += direction[k] * force_n;
@@ -406,7 +416,11 @@ impl Anschutz1906 {
         let i = &self.vane_inertia_kg_m2;
         let rot = |v: [f64; 3]| [ca * v[0] + sa * v[2], T::cst(v[1]), ca * v[2] - sa * v[0]];
         // P I (columns of I rotated), then (P I) Pᵀ: rows of P I rotated.
-        let pi: [V<T>; 3] = [rot([i[0][0], i[1][0], i[2][0]]), rot([i[0][1], i[1][1], i[2][1]]), rot([i[0][2], i[1][2], i[2][2]])];
+        let pi: [V<T>; 3] = [
+            rot([i[0][0], i[1][0], i[2][0]]),
+            rot([i[0][1], i[1][1], i[2][1]]),
+            rot([i[0][2], i[1][2], i[2][2]]),
+        ];
         // pi[c] is column c of P I; row r of P I is (pi[0][r], pi[1][r], pi[2][r]).
         let rotr = |v: V<T>| [ca * v[0] + sa * v[2], v[1], ca * v[2] - sa * v[0]];
         let iv = [
@@ -448,7 +462,10 @@ impl Anschutz1906 {
     /// The generalised forces other than inertia and drag: weight and jets.
     #[inline(always)]
     fn applied<T: Real>(&self, k: &Kin<T>) -> [T; 4] {
-        let tg = cross(&self.float_cg_m.map(T::cst), &scale(&k.g, T::cst(self.float_mass_kg)));
+        let tg = cross(
+            &self.float_cg_m.map(T::cst),
+            &scale(&k.g, T::cst(self.float_mass_kg)),
+        );
         let p = [0, 1, 2].map(|i| k.alpha * self.jet_point_per_rad_m[i] + self.jet_point_m[i]);
         let tj = cross(&p, &self.jet_force_n.map(T::cst));
         let t = add(&tg, &tj);
@@ -468,7 +485,10 @@ impl Anschutz1906 {
     /// f₁ = B q̇: the inertia forces linear in the rates (gyroscopic, Coriolis of the frame).
     #[inline(always)]
     fn f1<T: Real>(&self, k: &Kin<T>, qd: &[T; 4]) -> [T; 4] {
-        let w = add(&add(&scale(&k.e[0], qd[0]), &scale(&k.e[1], qd[1])), &[qd[2], T::zero(), T::zero()]);
+        let w = add(
+            &add(&scale(&k.e[0], qd[0]), &scale(&k.e[1], qd[1])),
+            &[qd[2], T::zero(), T::zero()],
+        );
         let wv = [w[0], w[1] + qd[3], w[2]];
         let j = &self.inertia_kg_m2;
         let tf = add(
@@ -487,19 +507,28 @@ impl Anschutz1906 {
     /// f₂: the inertia forces quadratic in the rates (relative motion alone).
     #[inline(always)]
     fn f2<T: Real>(&self, k: &Kin<T>, qd: &[T; 4]) -> [T; 4] {
-        let w = add(&add(&scale(&k.e[0], qd[0]), &scale(&k.e[1], qd[1])), &[qd[2], T::zero(), T::zero()]);
+        let w = add(
+            &add(&scale(&k.e[0], qd[0]), &scale(&k.e[1], qd[1])),
+            &[qd[2], T::zero(), T::zero()],
+        );
         let wv = [w[0], w[1] + qd[3], w[2]];
         // Ė q̇ = ζ̇ e_ζ × (θ̇ e_θ + λ̇ e_x) + θ̇ λ̇ e_θ × e_x.
         let inner = [qd[2], k.e[1][1] * qd[1], k.e[1][2] * qd[1]];
         let et_x = [T::zero(), k.e[1][2], -k.e[1][1]];
-        let wd = add(&scale(&cross(&k.e[0], &inner), qd[0]), &scale(&et_x, qd[1] * qd[2]));
+        let wd = add(
+            &scale(&cross(&k.e[0], &inner), qd[0]),
+            &scale(&et_x, qd[1] * qd[2]),
+        );
         let j = &self.inertia_kg_m2;
         let tf = add(&mul_c(j, &wd), &cross(&w, &mul_c(j, &w)));
         // ω × α̇ e_y = α̇ (−ω_z, 0, ω_x).
         let wxa = [-w[2] * qd[3], T::zero(), w[0] * qd[3]];
         let tv = add(&mul(&k.iv, &add(&wd, &wxa)), &cross(&wv, &mul(&k.iv, &wv)));
         let a = add(
-            &add(&scale(&k.rpp, qd[3] * qd[3]), &scale(&cross(&w, &k.rp), qd[3] * 2.0)),
+            &add(
+                &scale(&k.rpp, qd[3] * qd[3]),
+                &scale(&cross(&w, &k.rp), qd[3] * 2.0),
+            ),
             &add(&cross(&wd, &k.r), &cross(&w, &cross(&w, &k.r))),
         );
         Self::project(k, &tf, &tv, &scale(&a, T::cst(self.vane_mass_kg)))
