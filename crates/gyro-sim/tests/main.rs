@@ -9,6 +9,7 @@ mod anschutz;
 mod bad_input;
 mod effects_motor;
 mod engine_agreement;
+mod handwritten;
 mod hard_cases;
 mod interop_recording;
 mod modes_and_stiffness;

@@ -31,8 +31,11 @@
 //! its exact answer, `problems` holds the hand-written systems and scenes they use,
 //! `measurement` runs one case (timing, time budgets, errors), `report` holds the results and
 //! their table, and `peer` is gyrolab's side of the Python peer benchmark.
+//! `handwritten` holds Villarceau's eq. 44 bis and the Anschütz 1906 written out by hand, the
+//! yardstick of the engine's cost (`cargo bench -p gyro-sim --bench handwritten`).
 
 mod cases;
+pub mod handwritten;
 mod measurement;
 mod peer;
 mod problems;
