@@ -24,8 +24,14 @@
 //! accepted steps. Tolerances are mapped as RADAU5 maps them: rtol' = 0.1 rtol^(2/3),
 //! atol' = rtol'·atol/rtol, so that the achieved error is about rtol (the error estimate is of
 //! order 3 while the solution is of order 5). Dense output is the collocation polynomial of the
-//! step (cubic, continuous across steps; RADAU5's CONTR5). A singular iteration matrix halves
-//! the step; five in a row is an error.
+//! step (cubic, continuous across steps; RADAU5's CONTR5); its error between step ends is not
+//! controlled, which shows when every mode is stiff and the steps are long (Prothero–Robinson).
+//! A singular iteration matrix halves the step; five in a row is an error.
+//!
+//! Why the mapped tolerances: used as given (as SciPy's `Radau` does), the order-3 estimate
+//! at tight rtol forces steps that the Newton iteration on the lightly damped nutation then
+//! fails to converge on — on the stiff oscillator of the solver tests at rtol 1e-8, 183 599
+//! steps and 88 885 rejections against 50 576 and 2 863 mapped, for the same error.
 //!
 //! Coefficients: c₁, c₂ and e₁/γ₀, e₂/γ₀, e₃/γ₀ (RADAU5's DD1..DD3) in closed form in √6, γ
 //! and α ± iβ (eigenvalues of A⁻¹) from the cube roots 81^(1/3), 9^(1/3), T and T⁻¹ with the
