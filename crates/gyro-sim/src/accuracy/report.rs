@@ -140,7 +140,16 @@ impl StudyReport {
             let _ = writeln!(
                 s,
                 "   {:<8} {:<11} {:>7} {:>10} {:>10} {:>11} {:>9} {:>8} {:>6} {:>6}",
-                "method", "fidelity", "rtol", "rk4 step", "error", "wall", "rhs", "steps", "jac", "lu"
+                "method",
+                "fidelity",
+                "rtol",
+                "rk4 step",
+                "error",
+                "wall",
+                "rhs",
+                "steps",
+                "jac",
+                "lu"
             );
             for p in &c.points {
                 let err = match p.error {

@@ -26,10 +26,10 @@ mod dop853;
 mod dopri5;
 #[allow(clippy::needless_range_loop)]
 mod linalg;
-#[allow(clippy::needless_range_loop)]
-mod rk4;
 #[allow(clippy::excessive_precision, clippy::needless_range_loop)]
 mod radau5;
+#[allow(clippy::needless_range_loop)]
+mod rk4;
 #[allow(clippy::excessive_precision, clippy::needless_range_loop)]
 mod rodas4;
 

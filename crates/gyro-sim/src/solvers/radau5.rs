@@ -416,7 +416,11 @@ impl Stepper for Radau5 {
             }
             if newt > 1 && newt < NIT {
                 let thq = dyno / dynold;
-                theta = if newt == 2 { thq } else { (thq * thqold).sqrt() };
+                theta = if newt == 2 {
+                    thq
+                } else {
+                    (thq * thqold).sqrt()
+                };
                 thqold = thq;
                 if theta < 0.99 {
                     self.faccon = theta / (1.0 - theta);
@@ -479,7 +483,8 @@ impl Stepper for Radau5 {
         let mut h_new = h / quot;
         if err < 1.0 {
             if let Some((h_acc, err_acc)) = self.previous {
-                let facgus = (h_acc / h * (err * err / err_acc).powf(0.25) / SAFE).clamp(FACR, FACL);
+                let facgus =
+                    (h_acc / h * (err * err / err_acc).powf(0.25) / SAFE).clamp(FACR, FACL);
                 quot = quot.max(facgus);
                 h_new = h / quot;
             }
@@ -591,11 +596,7 @@ mod tests {
     #[test]
     fn transformation_diagonalises_a_inverse() {
         let t = [[T11, T12, T13], [T21, T22, T23], [T31, 1.0, 0.0]];
-        let ti = [
-            [TI11, TI12, TI13],
-            [TI21, TI22, TI23],
-            [TI31, TI32, TI33],
-        ];
+        let ti = [[TI11, TI12, TI13], [TI21, TI22, TI23], [TI31, TI32, TI33]];
         let mul = |a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]| {
             let mut c = [[0.0; 3]; 3];
             for i in 0..3 {
@@ -609,7 +610,11 @@ mod tests {
         for i in 0..3 {
             for j in 0..3 {
                 let e = if i == j { 1.0 } else { 0.0 };
-                assert!((id[i][j] - e).abs() < 1e-12, "T⁻¹T[{i}][{j}] = {}", id[i][j]);
+                assert!(
+                    (id[i][j] - e).abs() < 1e-12,
+                    "T⁻¹T[{i}][{j}] = {}",
+                    id[i][j]
+                );
             }
         }
         // TI · A⁻¹ · T = Λ  ⇔  A · T · Λ = T.
