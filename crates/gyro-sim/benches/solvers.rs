@@ -45,6 +45,7 @@ fn bench_solvers(c: &mut Criterion) {
         Method::Dop853,
         Method::Rk4 { step_s: 2e-3 },
         Method::Rodas4,
+        Method::Radau5,
     ] {
         // Work counters once per method, so a timing change can be told from a work change.
         let mut x = [1.0, 0.0];

@@ -18,6 +18,9 @@ use support::*;
 // ---------------------------------------------------------------------------------------------
 // Helpers
 
+/// The stiff integrators every stiff hard case runs with.
+const STIFF: [Method; 2] = [Method::Rodas4, Method::Radau5];
+
 fn foucault_scene(design: &str, lat: f64, start_extra: &str, ring_elev: f64) -> Scene {
     scene_from(
         &format!(
@@ -217,13 +220,15 @@ fn latitude_89_9_matches_the_closed_forms() {
         "gyroscopic",
     );
     let sc = scene_from(&text, &SceneOverrides::default());
-    let (sim, out, _) = run(&sc, Method::Rodas4, tol(1e-9, 1e-12));
-    let period = zeta_period(&zeta_series(&sim, &out));
-    let expect = th.undamped_period();
-    assert!(
-        (period / expect - 1.0).abs() < 0.005,
-        "89.9°: Anschütz period {period:.0} s vs eq. 10 {expect:.0} s"
-    );
+    for method in STIFF {
+        let (sim, out, _) = run(&sc, method, tol(1e-9, 1e-12));
+        let period = zeta_period(&zeta_series(&sim, &out));
+        let expect = th.undamped_period();
+        assert!(
+            (period / expect - 1.0).abs() < 0.005,
+            "89.9° ({method}): Anschütz period {period:.0} s vs eq. 10 {expect:.0} s"
+        );
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -260,6 +265,15 @@ fn villarceau_period_holds_up_to_the_separatrix() {
 
 #[test]
 fn full_model_at_20000_rpm_over_24_hours_with_rodas4() {
+    full_model_at_20000_rpm_over_24_hours(Method::Rodas4);
+}
+
+#[test]
+fn full_model_at_20000_rpm_over_24_hours_with_radau5() {
+    full_model_at_20000_rpm_over_24_hours(Method::Radau5);
+}
+
+fn full_model_at_20000_rpm_over_24_hours(method: Method) {
     let lat = 50.0;
     let mk = |fid: &str| {
         scene_from(
@@ -275,14 +289,17 @@ fn full_model_at_20000_rpm_over_24_hours_with_rodas4() {
     let th = theory(&full.design, lat);
     let slow = th.characteristic_roots()[0].1.abs();
     assert!(fast / slow > 1e5, "stiffness ratio {:.1e}", fast / slow);
-    let (sim_f, out_f, stats) = run(&full, Method::Rodas4, tol(1e-7, 1e-11));
+    let (sim_f, out_f, stats) = run(&full, method, tol(1e-7, 1e-11));
     let (sim_g, out_g, _) = run(&mk("gyroscopic"), Method::Rodas4, tol(1e-9, 1e-13));
     assert_eq!(sim_f.model.fidelity, Fidelity::Full);
     println!(
-        "full, 24 h: {} steps, {} rhs, {} jacobians",
-        stats.solver.steps, stats.solver.rhs_evals, stats.solver.jacobian_evals
+        "full, 24 h ({method}): {} steps, {} rhs, {} jacobians, {} LU",
+        stats.solver.steps,
+        stats.solver.rhs_evals,
+        stats.solver.jacobian_evals,
+        stats.solver.lu_decompositions
     );
-    // RODAS4 steps over the nutation instead of resolving it.
+    // The stiff method steps over the nutation instead of resolving it.
     assert!(
         stats.solver.steps < 20_000,
         "{} steps for 24 h",
@@ -381,34 +398,39 @@ fn zero_damping_keeps_the_amplitude() {
     // No air jets and no mercury drag on azimuth and tilt: nothing damps the slow mode. (The
     // vane's and the heel's own friction stay: without them those 0.3–1 s pendulums ring
     // forever and RODAS4 resolves them, 1.2 million steps and minutes for the same answer.)
-    // RODAS4 is L-stable: numerical damping would show as a shrinking amplitude.
-    let (sim, out, stats) = run(&sc, Method::Rodas4, tol(1e-9, 1e-13));
-    println!("zero damping: {} steps", stats.solver.steps);
-    let s = zeta_series(&sim, &out);
-    let peak = |from: f64, to: f64| {
-        s.iter()
-            .filter(|v| v.0 >= from && v.0 < to)
-            .map(|v| v.1.abs())
-            .fold(0.0, f64::max)
-    };
-    let first = peak(0.0, t0);
-    let last = peak(5.0 * t0, 6.0 * t0);
-    println!("zero damping: amplitude {first:e} → {last:e}");
-    assert!(
-        (last / first - 1.0).abs() < 1e-4,
-        "amplitude after 5 undamped periods: {last:e} vs {first:e}"
-    );
-    let period = zeta_period(&s);
-    assert!(
-        (period / t0 - 1.0).abs() < 0.005,
-        "undamped period {period:.1} s vs eq. 10 {t0:.1} s"
-    );
+    // RODAS4 and RADAU5 are L-stable: numerical damping would show as a shrinking amplitude.
+    for method in STIFF {
+        let (sim, out, stats) = run(&sc, method, tol(1e-9, 1e-13));
+        println!("zero damping ({method}): {} steps", stats.solver.steps);
+        let s = zeta_series(&sim, &out);
+        let peak = |from: f64, to: f64| {
+            s.iter()
+                .filter(|v| v.0 >= from && v.0 < to)
+                .map(|v| v.1.abs())
+                .fold(0.0, f64::max)
+        };
+        let first = peak(0.0, t0);
+        let last = peak(5.0 * t0, 6.0 * t0);
+        println!("zero damping: amplitude {first:e} → {last:e}");
+        assert!(
+            (last / first - 1.0).abs() < 1e-4,
+            "{method}: amplitude after 5 undamped periods: {last:e} vs {first:e}"
+        );
+        let period = zeta_period(&s);
+        assert!(
+            (period / t0 - 1.0).abs() < 0.005,
+            "undamped period {period:.1} s vs eq. 10 {t0:.1} s"
+        );
+    }
 }
 
 #[test]
 fn near_aperiodic_damping_follows_the_closed_form() {
     let lat = 50.0;
-    for xi in [0.999, 1.0] {
+    for (xi, method) in [0.999, 1.0]
+        .into_iter()
+        .flat_map(|xi| STIFF.map(|m| (xi, m)))
+    {
         let text = harbour(
             lat,
             &format!(
@@ -428,7 +450,7 @@ fn near_aperiodic_damping_follows_the_closed_form() {
             w2.abs() < 1e-2 * ap * tau / (h * h),
             "ξ = {xi}: not near-aperiodic"
         );
-        let (sim, out, _) = run(&sc, Method::Rodas4, tol(1e-10, 1e-14));
+        let (sim, out, _) = run(&sc, method, tol(1e-10, 1e-14));
         let s = zeta_series(&sim, &out);
         let (z0, zd0) = (s[0].1, s[0].2);
         let exact = |t: f64| {
@@ -450,7 +472,7 @@ fn near_aperiodic_damping_follows_the_closed_form() {
             / z0.abs();
         let undershoot = s.iter().map(|v| -v.1 / z0).fold(0.0, f64::max);
         println!(
-            "ξ = {xi}: max |ζ − closed form| = {worst:.2e} of ζ₀, undershoot {undershoot:.2e}"
+            "ξ = {xi} ({method}): max |ζ − closed form| = {worst:.2e} of ζ₀, undershoot {undershoot:.2e}"
         );
         assert!(
             worst < 1e-2,
@@ -549,51 +571,55 @@ disable_effects = ["damper"]
         scene_from(&text, &SceneOverrides::default())
     };
     let th = theory(&anschutz(0.0, 1.0, true).design, lat);
-    let mut t_prev = 0.0;
-    for f in [0.0f64, 0.5, 0.75] {
-        let expect = th.undamped_period() / (1.0 - f).sqrt();
-        let sc = anschutz(f, 3.3 * expect / 3600.0, true);
-        let (sim, out, _) = run(&sc, Method::Rodas4, tol(1e-9, 1e-12));
-        let period = zeta_period(&zeta_series(&sim, &out));
-        println!("cancelled {f}: period {period:.0} s vs {expect:.0} s");
-        assert!(
-            (period / expect - 1.0).abs() < 0.01,
-            "f = {f}: period {period:.0} s vs 2π√(IΩ/(aP(ε cos L − v_W/R))) = {expect:.0} s"
-        );
-        assert!(period > t_prev);
-        t_prev = period;
+    for method in STIFF {
+        let mut t_prev = 0.0;
+        for f in [0.0f64, 0.5, 0.75] {
+            let expect = th.undamped_period() / (1.0 - f).sqrt();
+            let sc = anschutz(f, 3.3 * expect / 3600.0, true);
+            let (sim, out, _) = run(&sc, method, tol(1e-9, 1e-12));
+            let period = zeta_period(&zeta_series(&sim, &out));
+            println!("cancelled {f} ({method}): period {period:.0} s vs {expect:.0} s");
+            assert!(
+                (period / expect - 1.0).abs() < 0.01,
+                "f = {f}: period {period:.0} s vs 2π√(IΩ/(aP(ε cos L − v_W/R))) = {expect:.0} s"
+            );
+            assert!(period > t_prev);
+            t_prev = period;
+        }
     }
     // ...and at full cancellation there is no North to seek: the run is defined (no blow-up),
     // the compass keeps no oscillation and the tilt stays small.
-    let sc = anschutz(1.0, 6.0, false);
-    let (sim, out, _) = run(&sc, Method::Rodas4, tol(1e-9, 1e-12));
-    let tilt = out
-        .iter()
-        .map(|(t, x)| sim.model.readout(*t, x).tilt_rad.abs())
-        .fold(0.0, f64::max);
-    let err: Vec<f64> = out
-        .iter()
-        .map(|(t, x)| sim.model.readout(*t, x).reading_error_rad)
-        .collect();
-    println!(
-        "full cancellation: reading error {:.3}° → {:.3}°, max tilt {:.3}°",
-        err[0].to_degrees(),
-        err[err.len() - 1].to_degrees(),
-        tilt.to_degrees()
-    );
-    assert!(err.iter().all(|e| e.is_finite()));
-    assert!(tilt < 1f64.to_radians(), "tilt {:.3}°", tilt.to_degrees());
-    // No North-seeking: the reading error drifts one way, never swings back...
-    assert!(
-        err.windows(2).all(|w| w[1] >= w[0]) || err.windows(2).all(|w| w[1] <= w[0]),
-        "the reading error oscillates: something still directs the compass"
-    );
-    // ...and no faster than the largest uncompensated precession, the overload made to cancel
-    // the Earth's vertical rate at 50°N (Pd = IΩε sin 50°).
-    let bound = EARTH_RATE_RAD_PER_S * 50f64.to_radians().sin() * 6.0 * 3600.0;
-    let drift = (err[err.len() - 1] - err[0]).abs();
-    assert!(
-        drift < bound,
-        "drift {drift:.3} rad in 6 h > {bound:.3} rad"
-    );
+    for method in STIFF {
+        let sc = anschutz(1.0, 6.0, false);
+        let (sim, out, _) = run(&sc, method, tol(1e-9, 1e-12));
+        let tilt = out
+            .iter()
+            .map(|(t, x)| sim.model.readout(*t, x).tilt_rad.abs())
+            .fold(0.0, f64::max);
+        let err: Vec<f64> = out
+            .iter()
+            .map(|(t, x)| sim.model.readout(*t, x).reading_error_rad)
+            .collect();
+        println!(
+            "full cancellation ({method}): reading error {:.3}° → {:.3}°, max tilt {:.3}°",
+            err[0].to_degrees(),
+            err[err.len() - 1].to_degrees(),
+            tilt.to_degrees()
+        );
+        assert!(err.iter().all(|e| e.is_finite()));
+        assert!(tilt < 1f64.to_radians(), "tilt {:.3}°", tilt.to_degrees());
+        // No North-seeking: the reading error drifts one way, never swings back...
+        assert!(
+            err.windows(2).all(|w| w[1] >= w[0]) || err.windows(2).all(|w| w[1] <= w[0]),
+            "the reading error oscillates: something still directs the compass"
+        );
+        // ...and no faster than the largest uncompensated precession, the overload made to cancel
+        // the Earth's vertical rate at 50°N (Pd = IΩε sin 50°).
+        let bound = EARTH_RATE_RAD_PER_S * 50f64.to_radians().sin() * 6.0 * 3600.0;
+        let drift = (err[err.len() - 1] - err[0]).abs();
+        assert!(
+            drift < bound,
+            "drift {drift:.3} rad in 6 h > {bound:.3} rad"
+        );
+    }
 }

@@ -76,6 +76,7 @@ fn allocations_do_not_grow_with_steps() {
         Method::Dop853,
         Method::Rk4 { step_s: 1e-2 },
         Method::Rodas4,
+        Method::Radau5,
     ] {
         let (short, short_steps) = allocations_for(method, 10.0);
         let (long, long_steps) = allocations_for(method, 200.0);

@@ -246,6 +246,7 @@ impl Case {
                     wall_s: wall,
                     rhs_evals: 0,
                     jacobian_evals: 0,
+                    lu_decompositions: 0,
                     steps: 0,
                     rejected_steps: 0,
                     note: Some("exact propagation by one matrix exponential".into()),
@@ -287,6 +288,7 @@ impl Case {
                         wall_s: 0.0,
                         rhs_evals: 0,
                         jacobian_evals: 0,
+                        lu_decompositions: 0,
                         steps: 0,
                         rejected_steps: 0,
                         note: None,
@@ -301,7 +303,7 @@ impl Case {
                         Method::Rk4 { step_s } => 4.0 * self.t_end / step_s,
                         Method::Dopri5 => 6.0 * self.t_end * rho / 3.3,
                         Method::Dop853 => 12.0 * self.t_end * rho / 6.0,
-                        Method::Rodas4 => 0.0,
+                        Method::Rodas4 | Method::Radau5 => 0.0,
                     };
                     if predicted * rhs_cost > opts.max_point_s {
                         let why = format!(
@@ -323,6 +325,7 @@ impl Case {
                             p.error = Some(err);
                             p.rhs_evals = stats.rhs_evals;
                             p.jacobian_evals = stats.jacobian_evals;
+                            p.lu_decompositions = stats.lu_decompositions;
                             p.steps = stats.steps;
                             p.rejected_steps = stats.rejected_steps;
                         }

@@ -85,6 +85,7 @@ impl Default for StudyOptions {
                 Method::Dopri5,
                 Method::Dop853,
                 Method::Rodas4,
+                Method::Radau5,
                 Method::Rk4 {
                     step_s: Method::DEFAULT_RK4_STEP_S,
                 },

@@ -63,8 +63,8 @@ pub struct PeerReport {
 const PEER_PERIODS: f64 = 100.0;
 
 /// Runs gyrolab's side of the peer benchmark: for each tolerance, Villarceau over 100 periods
-/// (hand-written eq. 44 bis and the engine) and the 4-state Anschütz, with DOP853, DOPRI5 and
-/// RODAS4. Errors are measured exactly as `analysis/bench/peer.py` measures SciPy's.
+/// (hand-written eq. 44 bis and the engine) and the 4-state Anschütz, with DOP853, DOPRI5,
+/// RODAS4 and RADAU5. Errors are measured exactly as `analysis/bench/peer.py` measures SciPy's.
 pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
     let setup = |message: String| StudyError::Setup {
         case: "peer".into(),
@@ -91,7 +91,13 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
             atol: rtol * atol_factor,
             ..Default::default()
         };
-        for method in [Method::Dop853, Method::Dopri5, Method::Rodas4] {
+        for method in [
+            Method::Dop853,
+            Method::Dopri5,
+            Method::Rodas4,
+            Method::Radau5,
+        ] {
+            let implicit = matches!(method, Method::Rodas4 | Method::Radau5);
             let end_error = |last: &[f64], x0: &[f64]| {
                 (last[0] - x0[0]).hypot((last[1] - x0[1]) / w0) / amplitude
             };
@@ -111,8 +117,9 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
                 &grid,
                 &end_error,
             ));
-            // The engine (explicit methods only: RODAS4's AD Jacobian is not the point here).
-            if method != Method::Rodas4 {
+            // The engine (explicit methods only: the implicit ones' AD Jacobian is not the point
+            // here).
+            if !implicit {
                 points.push(end_state_point(
                     opts,
                     "gyrolab engine",
@@ -125,7 +132,7 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
                 ));
             }
             // 4-state Anschütz (explicit methods are stability-bound: loosest tolerance only).
-            if method == Method::Rodas4 || rtol == opts.tolerances[0] {
+            if implicit || rtol == opts.tolerances[0] {
                 let tol4 = Tolerances {
                     atol: rtol * 1e-4,
                     ..tol

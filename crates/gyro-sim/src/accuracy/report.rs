@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 /// One run of one configuration.
 #[derive(Clone, Debug, Serialize)]
 pub struct Point {
-    /// `dopri5`, `dop853`, `rodas4`, `rk4`, or `expm` (exact propagation of `linear`).
+    /// `dopri5`, `dop853`, `rodas4`, `radau5`, `rk4`, or `expm` (exact propagation of `linear`).
     pub method: String,
     pub fidelity: String,
     /// Relative tolerance asked for (for RK4: the tolerance its step was chosen from).
@@ -18,6 +18,8 @@ pub struct Point {
     pub wall_s: f64,
     pub rhs_evals: u64,
     pub jacobian_evals: u64,
+    /// LU decompositions of the implicit methods' iteration matrices.
+    pub lu_decompositions: u64,
     pub steps: u64,
     pub rejected_steps: u64,
     /// Why the run failed or was skipped.
@@ -137,8 +139,17 @@ impl StudyReport {
             }
             let _ = writeln!(
                 s,
-                "   {:<8} {:<11} {:>7} {:>10} {:>10} {:>11} {:>9} {:>8} {:>6}",
-                "method", "fidelity", "rtol", "rk4 step", "error", "wall", "rhs", "steps", "jac"
+                "   {:<8} {:<11} {:>7} {:>10} {:>10} {:>11} {:>9} {:>8} {:>6} {:>6}",
+                "method",
+                "fidelity",
+                "rtol",
+                "rk4 step",
+                "error",
+                "wall",
+                "rhs",
+                "steps",
+                "jac",
+                "lu"
             );
             for p in &c.points {
                 let err = match p.error {
@@ -147,7 +158,7 @@ impl StudyReport {
                 };
                 let _ = writeln!(
                     s,
-                    "   {:<8} {:<11} {:>7} {:>10} {:>10} {:>11} {:>9} {:>8} {:>6}{}",
+                    "   {:<8} {:<11} {:>7} {:>10} {:>10} {:>11} {:>9} {:>8} {:>6} {:>6}{}",
                     p.method,
                     p.fidelity,
                     if p.rtol > 0.0 {
@@ -165,6 +176,7 @@ impl StudyReport {
                     p.rhs_evals,
                     p.steps,
                     p.jacobian_evals,
+                    p.lu_decompositions,
                     p.note.as_ref().map_or(String::new(), |n| format!("  {n}"))
                 );
             }

@@ -137,7 +137,7 @@ pub(super) fn solver(
                 Some("[simulation]"),
                 "integrator",
                 "simulation.integrator",
-                format!("{e} (allowed: dopri5, dop853, rk4[:step_s], rodas4)"),
+                format!("{e} (allowed: dopri5, dop853, rk4[:step_s], rodas4, radau5)"),
             )
         })?,
     };

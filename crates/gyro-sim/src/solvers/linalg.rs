@@ -1,5 +1,6 @@
 //! Dense LU factorisation with partial pivoting for the small (2–16 state) iteration matrices
-//! of the implicit solver. Row-major storage, in place, no allocation.
+//! of the implicit solvers, real and complex (RADAU5's (α + iβ)/h · I − J). Row-major storage,
+//! in place, no allocation.
 
 /// Factor the row-major n×n matrix `a` in place into L (unit lower, below the diagonal) and U,
 /// with row interchanges recorded in `piv` (row k was swapped with row `piv[k]`).
@@ -59,6 +60,92 @@ pub(crate) fn lu_solve(a: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
     }
 }
 
+/// Complex counterpart of [`lu_decompose`] for the row-major n×n matrix `re + i·im`, pivoting
+/// on |re| + |im| as Hairer's `DECC` does. Returns false on a zero pivot.
+pub(crate) fn lu_decompose_complex(
+    re: &mut [f64],
+    im: &mut [f64],
+    n: usize,
+    piv: &mut [usize],
+) -> bool {
+    for k in 0..n {
+        let mut p = k;
+        let mut best = re[k * n + k].abs() + im[k * n + k].abs();
+        for i in k + 1..n {
+            let v = re[i * n + k].abs() + im[i * n + k].abs();
+            if v > best {
+                best = v;
+                p = i;
+            }
+        }
+        piv[k] = p;
+        if best.is_nan() || best == 0.0 {
+            return false;
+        }
+        if p != k {
+            for j in 0..n {
+                re.swap(k * n + j, p * n + j);
+                im.swap(k * n + j, p * n + j);
+            }
+        }
+        let (pr, pi) = (re[k * n + k], im[k * n + k]);
+        let d = pr * pr + pi * pi;
+        let (inv_r, inv_i) = (pr / d, -pi / d);
+        for i in k + 1..n {
+            let (ar, ai) = (re[i * n + k], im[i * n + k]);
+            let lr = ar * inv_r - ai * inv_i;
+            let li = ar * inv_i + ai * inv_r;
+            re[i * n + k] = lr;
+            im[i * n + k] = li;
+            if lr != 0.0 || li != 0.0 {
+                for j in k + 1..n {
+                    let (ur, ui) = (re[k * n + j], im[k * n + j]);
+                    re[i * n + j] -= lr * ur - li * ui;
+                    im[i * n + j] -= lr * ui + li * ur;
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Solve (re + i·im) y = b in place (`br + i·bi` becomes y) from [`lu_decompose_complex`].
+pub(crate) fn lu_solve_complex(
+    re: &[f64],
+    im: &[f64],
+    n: usize,
+    piv: &[usize],
+    br: &mut [f64],
+    bi: &mut [f64],
+) {
+    for k in 0..n {
+        br.swap(k, piv[k]);
+        bi.swap(k, piv[k]);
+    }
+    for i in 1..n {
+        let (mut sr, mut si) = (br[i], bi[i]);
+        for j in 0..i {
+            let (ar, ai) = (re[i * n + j], im[i * n + j]);
+            sr -= ar * br[j] - ai * bi[j];
+            si -= ar * bi[j] + ai * br[j];
+        }
+        br[i] = sr;
+        bi[i] = si;
+    }
+    for i in (0..n).rev() {
+        let (mut sr, mut si) = (br[i], bi[i]);
+        for j in i + 1..n {
+            let (ar, ai) = (re[i * n + j], im[i * n + j]);
+            sr -= ar * br[j] - ai * bi[j];
+            si -= ar * bi[j] + ai * br[j];
+        }
+        let (pr, pi) = (re[i * n + i], im[i * n + i]);
+        let d = pr * pr + pi * pi;
+        br[i] = (sr * pr + si * pi) / d;
+        bi[i] = (si * pr - sr * pi) / d;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -86,5 +173,31 @@ mod tests {
         let mut a = [1.0, 2.0, 2.0, 4.0];
         let mut piv = [0; 2];
         assert!(!lu_decompose(&mut a, 2, &mut piv));
+    }
+
+    #[test]
+    fn complex_solve_needs_pivoting_and_recovers_the_solution() {
+        // A (re + i im) with a zero (0,0) entry; y known, b = A y formed in complex arithmetic.
+        let ar0 = [0.0, 2.0, 1.0, 1.0, -1.0, 0.5, 3.0, 0.0, 1.0];
+        let ai0 = [0.0, 1.0, -1.0, 2.0, 0.5, 0.0, 0.0, -3.0, 1.0];
+        let (yr, yi) = ([1.0, -2.0, 0.5], [0.25, 1.0, -1.5]);
+        let (mut br, mut bi) = ([0.0; 3], [0.0; 3]);
+        for i in 0..3 {
+            for j in 0..3 {
+                let (a, b) = (ar0[i * 3 + j], ai0[i * 3 + j]);
+                br[i] += a * yr[j] - b * yi[j];
+                bi[i] += a * yi[j] + b * yr[j];
+            }
+        }
+        let (mut ar, mut ai) = (ar0, ai0);
+        let mut piv = [0; 3];
+        assert!(lu_decompose_complex(&mut ar, &mut ai, 3, &mut piv));
+        assert_ne!(piv[0], 0, "the zero pivot must be swapped away");
+        lu_solve_complex(&ar, &ai, 3, &piv, &mut br, &mut bi);
+        for i in 0..3 {
+            assert!((br[i] - yr[i]).abs() < 1e-14 && (bi[i] - yi[i]).abs() < 1e-14);
+        }
+        let (mut sr, mut si) = ([1.0, 2.0, 2.0, 4.0], [1.0, 0.0, 2.0, 0.0]);
+        assert!(!lu_decompose_complex(&mut sr, &mut si, 2, &mut piv));
     }
 }

@@ -14,7 +14,7 @@
 use super::linalg::{lu_decompose, lu_solve};
 use super::{
     Attempt, InitialStepScratch, OdeSystem, SolveError, SolverStats, Stepper, Tolerances, Window,
-    error_norm, initial_step,
+    difference_jacobian, error_norm, initial_step,
 };
 
 const C2: f64 = 0.386;
@@ -131,26 +131,17 @@ impl Rodas4 {
         let te = w.at(t);
         stats.jacobian_evals += 1;
         if !sys.jacobian(te, x, &mut self.jac) {
-            // Central differences. Hairer's forward differences (increment sqrt(eps·|x_j|))
-            // carry round-off eps·|f|/δ; on slow motion plus stiff nutation that error, scaled
-            // by the nutation's stiffness, swamped the slow mode's entries of J and cut Rodas4's
-            // steps ~200-fold (stiff test: 10633 → 496 steps per 1000 s; exact J: 56).
-            self.x_stage.copy_from_slice(x);
-            for j in 0..n {
-                let saved = self.x_stage[j];
-                let delta = f64::EPSILON.cbrt() * saved.abs().max(1e-2);
-                self.x_stage[j] = saved + delta;
-                let up = self.x_stage[j];
-                sys.rhs(te, &self.x_stage, &mut self.dy);
-                self.x_stage[j] = saved - delta;
-                let down = self.x_stage[j];
-                sys.rhs(te, &self.x_stage, &mut self.ak[0]);
-                for i in 0..n {
-                    self.jac[i * n + j] = (self.dy[i] - self.ak[0][i]) / (up - down);
-                }
-                self.x_stage[j] = saved;
-            }
-            stats.rhs_evals += 2 * n as u64;
+            let [scratch, ..] = &mut self.ak;
+            difference_jacobian(
+                sys,
+                te,
+                x,
+                &mut self.jac,
+                &mut self.x_stage,
+                &mut self.dy,
+                scratch,
+                stats,
+            );
         }
         // df/dt by a forward difference, kept inside the segment.
         let delta = (f64::EPSILON * t.abs().max(1e-5)).sqrt();
