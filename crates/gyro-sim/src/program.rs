@@ -133,7 +133,82 @@ fn eval_segment<T: Real>(s: &Segment, tau: T) -> (T, T, T) {
     }
 }
 
+/// (latitude, speed, heading) of a segment at local time τ with their first and second time
+/// derivatives, `[value, d/dτ, d²/dτ²]`: the closed forms of [`eval_segment`] differentiated.
+fn eval_segment_d2(s: &Segment, tau: f64) -> [[f64; 3]; 3] {
+    let v0 = s.speed0_m_per_s;
+    let h0 = s.heading0_rad;
+    match s.kind {
+        SegmentKind::Steady => {
+            // Moored (v0 = 0) is the common case under a sea: no cosine for a zero rate.
+            let lat_rate = if v0 == 0.0 {
+                0.0
+            } else {
+                v0 * h0.cos() / EARTH_RADIUS_M
+            };
+            [
+                [tau * lat_rate + s.latitude0_rad, lat_rate, 0.0],
+                [v0, 0.0, 0.0],
+                [h0, 0.0, 0.0],
+            ]
+        }
+        SegmentKind::SpeedChange {
+            acceleration_m_per_s2: a,
+        } => {
+            let k = h0.cos() / EARTH_RADIUS_M;
+            let dist = tau * v0 + tau * tau * (0.5 * a);
+            let v = tau * a + v0;
+            [
+                [dist * k + s.latitude0_rad, v * k, a * k],
+                [v, a, 0.0],
+                [h0, 0.0, 0.0],
+            ]
+        }
+        SegmentKind::Turn { rate_rad_per_s: r } => {
+            let h = tau * r + h0;
+            let (sh, ch) = h.sin_cos();
+            let lat = (sh - h0.sin()) * (v0 / (r * EARTH_RADIUS_M)) + s.latitude0_rad;
+            let k = v0 / EARTH_RADIUS_M;
+            [[lat, ch * k, -sh * r * k], [v0, 0.0, 0.0], [h, r, 0.0]]
+        }
+    }
+}
+
+/// A sinusoid a·sin(2π t/period + phase) with its first and second time derivatives.
+fn sinusoid_d2(amplitude: f64, period_s: f64, phase_rad: f64, t: f64) -> [f64; 3] {
+    if amplitude == 0.0 {
+        return [0.0; 3];
+    }
+    let w = std::f64::consts::TAU / period_s;
+    let (s, c) = (t * w + phase_rad).sin_cos();
+    [amplitude * s, amplitude * w * c, -amplitude * w * w * s]
+}
+
 impl ShipMotion for ShipProgram {
+    /// Closed forms: one `sin_cos` per sinusoid of the sea (and one in a turn), no dual numbers.
+    fn kinematics_d2(&self, t: f64) -> ShipKinematics<[f64; 3]> {
+        let s = self.segment_at(t);
+        let [lat, v, h] = eval_segment_d2(s, t - s.start_s);
+        let sea = &self.sea;
+        ShipKinematics {
+            latitude_rad: lat,
+            heading_rad: h,
+            speed_m_per_s: v,
+            roll_rad: sinusoid_d2(
+                sea.roll_amplitude_rad,
+                sea.roll_period_s,
+                sea.roll_phase_rad,
+                t,
+            ),
+            pitch_rad: sinusoid_d2(
+                sea.pitch_amplitude_rad,
+                sea.pitch_period_s,
+                sea.pitch_phase_rad,
+                t,
+            ),
+        }
+    }
+
     fn kinematics<T: Real>(&self, t: T) -> ShipKinematics<T> {
         let s = self.segment_at(t.re());
         let (lat, v, h) = eval_segment(s, t - s.start_s);
@@ -201,6 +276,60 @@ mod tests {
             manoeuvre: String::new(),
             entry: 0,
             description: String::new(),
+        }
+    }
+
+    #[test]
+    fn closed_form_derivatives_are_the_programs_own() {
+        let sea = SeaState {
+            roll_amplitude_rad: 0.07,
+            roll_period_s: 10.0,
+            roll_phase_rad: 0.3,
+            pitch_amplitude_rad: 0.02,
+            pitch_period_s: 7.0,
+            pitch_phase_rad: -1.0,
+        };
+        for kind in [
+            SegmentKind::Steady,
+            SegmentKind::SpeedChange {
+                acceleration_m_per_s2: 0.2,
+            },
+            SegmentKind::Turn {
+                rate_rad_per_s: 0.01,
+            },
+        ] {
+            let mut s = seg(kind, 10.0, 0.7);
+            s.start_s = 100.0;
+            let p = ShipProgram {
+                segments: vec![s],
+                sea,
+                end_s: 700.0,
+                force_moving: false,
+            };
+            for t in [100.0, 217.0, 433.0] {
+                let fast = p.kinematics_d2(t);
+                let t2: Jet<Jet<f64, 1>, 1> = Jet {
+                    v: Jet::variable(t, 0),
+                    d: [Jet::constant(1.0)],
+                };
+                let k = p.kinematics(t2);
+                let pairs = [
+                    (fast.latitude_rad, k.latitude_rad),
+                    (fast.heading_rad, k.heading_rad),
+                    (fast.speed_m_per_s, k.speed_m_per_s),
+                    (fast.roll_rad, k.roll_rad),
+                    (fast.pitch_rad, k.pitch_rad),
+                ];
+                for (f, j) in pairs {
+                    let exact = [j.v.v, j.v.d[0], j.d[0].d[0]];
+                    for i in 0..3 {
+                        assert!(
+                            (f[i] - exact[i]).abs() <= 1e-14 * (1.0 + exact[i].abs()),
+                            "{kind:?} t = {t}: {f:?} vs {exact:?}"
+                        );
+                    }
+                }
+            }
         }
     }
 
