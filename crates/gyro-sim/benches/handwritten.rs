@@ -1,5 +1,6 @@
 //! The engine's overhead as a ratio measured in one run: the engine's `rhs` and `jacobian`
-//! against hand-written equations of the same compass (`gyro_sim::accuracy::handwritten`, held
+//! (the model's recorded tapes), and the generic engine they are recorded from (`rhs_engine`,
+//! `jacobian_engine`: the cost before the tape, printed beside each ratio), against hand-written equations of the same compass (`gyro_sim::accuracy::handwritten`, held
 //! to the engine to rounding by `tests/handwritten.rs`), at each scene's initial state, for
 //! Foucault's azimuth gyroscope (`foucault-azimuth-45n`, full) and the Anschütz 1906
 //! (`harbour-50n`, gyroscopic and full); and a whole Villarceau run (the accuracy study's
@@ -139,6 +140,25 @@ fn run<S: OdeSystem>(sys: &mut S, x0: &[f64], grid: &OutputGrid) -> (Vec<f64>, S
 const TARGET_EVAL: f64 = 3.0;
 const TARGET_RUN: f64 = 1.5;
 
+/// The model through the generic engine it records its tape from (`rhs_engine`,
+/// `jacobian_engine`): what a run cost before the tape.
+struct GenericSystem<'a, M: gyro_model::ShipMotion>(&'a gyro_model::CompiledModel<M>);
+
+impl<M: gyro_model::ShipMotion> OdeSystem for GenericSystem<'_, M> {
+    fn dim(&self) -> usize {
+        self.0.dim()
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        if !self.0.rhs_engine(t, x, dx) {
+            dx.fill(f64::NAN);
+        }
+    }
+    fn jacobian(&mut self, t: f64, x: &[f64], jac: &mut [f64]) -> bool {
+        self.0.jacobian_engine(t, x, jac);
+        true
+    }
+}
+
 fn main() {
     let clock = ThreadCpu::new();
     let samples = Totals::default();
@@ -164,12 +184,14 @@ fn main() {
         let dim = x.len();
         let mut dx = vec![0.0; dim];
         let mut jac = vec![0.0; dim * dim];
-        for side in ["engine", "hand-written"] {
+        for side in ["engine", "generic", "hand-written"] {
             let key = format!("{label}/rhs/{side}");
             group.bench_function(&key, |b| {
                 samples.bench(b, &clock, &key, || {
                     if side == "engine" {
                         black_box(m.rhs(black_box(1.0), black_box(&x), &mut dx));
+                    } else if side == "generic" {
+                        black_box(m.rhs_engine(black_box(1.0), black_box(&x), &mut dx));
                     } else {
                         hand.rhs(black_box(1.0), black_box(&x), &mut dx);
                     }
@@ -177,12 +199,14 @@ fn main() {
                 })
             });
         }
-        for side in ["engine", "hand-written"] {
+        for side in ["engine", "generic", "hand-written"] {
             let key = format!("{label}/jacobian/{side}");
             group.bench_function(&key, |b| {
                 samples.bench(b, &clock, &key, || {
                     if side == "engine" {
                         m.jacobian(black_box(1.0), black_box(&x), &mut jac);
+                    } else if side == "generic" {
+                        m.jacobian_engine(black_box(1.0), black_box(&x), &mut jac);
                     } else {
                         hand.jacobian(black_box(1.0), black_box(&x), &mut jac);
                     }
@@ -196,12 +220,14 @@ fn main() {
     let (xe, se) = run(&mut ModelSystem { model: &vsim.model }, &x0, &vgrid);
     let (xh, sh) = run(&mut vhand, &x0, &vgrid);
     group.sample_size(20);
-    for side in ["engine", "hand-written"] {
+    for side in ["engine", "generic", "hand-written"] {
         let key = format!("villarceau-large/run/{side}");
         group.bench_function(&key, |b| {
             samples.bench(b, &clock, &key, || {
                 if side == "engine" {
                     black_box(run(&mut ModelSystem { model: &vsim.model }, &x0, &vgrid));
+                } else if side == "generic" {
+                    black_box(run(&mut GenericSystem(&vsim.model), &x0, &vgrid));
                 } else {
                     black_box(run(&mut vhand, &x0, &vgrid));
                 }
@@ -227,8 +253,17 @@ fn main() {
         };
         let ratio = e / h;
         let verdict = if ratio <= target { "met" } else { "missed" };
+        let generic = samples
+            .mean(&format!("{key}/generic"))
+            .map_or(String::new(), |g| {
+                format!(
+                    " (generic engine, before the tape: {:.1} {unit}, {:.2}×)",
+                    g / div,
+                    g / h
+                )
+            });
         println!(
-            "{key:<40} {:>9.1} {unit} {:>9.1} {unit} {ratio:>7.2}×  ≤ {target}× {verdict}",
+            "{key:<40} {:>9.1} {unit} {:>9.1} {unit} {ratio:>7.2}×  ≤ {target}× {verdict}{generic}",
             e / div,
             h / div
         );
