@@ -1729,6 +1729,11 @@ impl<M: ShipMotion> CompiledModel<M> {
 
     /// All coordinates and rates (servo-driven included) at a state.
     pub fn full_coordinates(&self, t: f64, x: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        assert_eq!(
+            x.len(),
+            self.dim(),
+            "a state in the model's own layout (`equilibrium_state()`, not `x_equilibrium`)"
+        );
         let n = self.chain.n;
         let ni = self.independent.len();
         let mut q = vec![0.0; n];

@@ -39,8 +39,10 @@ fn harbour_swing_has_the_period_and_decay_of_eqs_20_to_23() {
             &SceneOverrides::default(),
         );
         let (sim, out, _) = run(&sc, Method::Rodas4, tol(1e-9, 1e-12));
-        let xe = &sim.model.x_equilibrium;
-        let r0 = sim.model.readout(0.0, xe).reading_error_rad;
+        let r0 = sim
+            .model
+            .readout(0.0, &sim.model.equilibrium_state())
+            .reading_error_rad;
         let iz = support::coordinate(&sim, "zeta");
         let t: Vec<f64> = out.iter().map(|v| v.0).collect();
         let (y, yd): (Vec<f64>, Vec<f64>) = out
@@ -161,7 +163,7 @@ atol = 1e-12
         let sc = scene_from(&harbour(lat, undamped, 0.01), &SceneOverrides::default());
         let s = Simulation::new(&sc).expect("compiles");
         s.model
-            .readout(0.0, &s.model.x_equilibrium)
+            .readout(0.0, &s.model.equilibrium_state())
             .reading_error_rad
     };
     let swing = out

@@ -26,8 +26,7 @@ fn harbour(lat: f64, compass: &str, hours: f64) -> String {
 /// (t, reading error − its equilibrium, its rate, θ − its equilibrium) from the readouts (the
 /// card sits on the phantom, which does not tilt: the tilt is the gyro case's coordinate).
 fn swing(sim: &Simulation, out: &[(f64, Vec<f64>)]) -> Vec<(f64, f64, f64, f64)> {
-    let xe = &sim.model.x_equilibrium;
-    let r0 = sim.model.readout(0.0, xe);
+    let r0 = sim.model.readout(0.0, &sim.model.equilibrium_state());
     let iz = sim
         .model
         .role(gyro_model::CoordinateRole::Azimuth)
@@ -232,7 +231,7 @@ fn schuler_tuned_speed_change_lands_on_the_new_equilibrium() {
         );
         let sim = Simulation::new(&sc).expect("compiles");
         sim.model
-            .readout(0.0, &sim.model.x_equilibrium)
+            .readout(0.0, &sim.model.equilibrium_state())
             .reading_error_rad
     };
     let undamped = "design_overrides = { \"parameters.roller_offset_rad\" = 0.0 }";
@@ -496,7 +495,7 @@ rtol = 1e-7
     let still = Simulation::new(&harbour).expect("compiles");
     let at_rest = still
         .model
-        .readout(0.0, &still.model.x_equilibrium)
+        .readout(0.0, &still.model.equilibrium_state())
         .reading_error_rad;
     let sc = scene_from(&text(true), &SceneOverrides::default());
     let (sim, out, _) = run(&sc, Method::Dop853, tol(1e-7, 1e-10));

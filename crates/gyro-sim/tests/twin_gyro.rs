@@ -157,7 +157,7 @@ fn simulated_modes(
     let (sim, out, _) = run(&sc, Method::Rodas4, tol(1e-9, 1e-12));
     let names = ["zeta", "theta", "alpha", "beta"];
     let idx: Vec<usize> = names.iter().map(|n| coordinate(&sim, n)).collect();
-    let q_eq = sim.model.readout(0.0, &sim.model.x_equilibrium).q;
+    let q_eq = sim.model.readout(0.0, &sim.model.equilibrium_state()).q;
     let channels: Vec<Vec<f64>> = idx
         .iter()
         .map(|&i| {
