@@ -44,5 +44,5 @@ pub use earth::{BaseEffects, Moored, ShipKinematics, ShipMotion};
 pub use error::InputError;
 pub use model::{
     BodyPose, CompiledModel, EFFECT_NAMES, Effects, Energetics, Fidelity, InitialCondition,
-    ModelError, ModelOptions, Readout,
+    ModelError, ModelOptions, Readout, TapeSize,
 };

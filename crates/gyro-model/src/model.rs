@@ -368,9 +368,42 @@ pub struct CompiledModel<M: ShipMotion> {
     /// The equations recorded once per fidelity evaluated (`tape`): what `rhs` and `jacobian`
     /// run. Inputs: the state, then the base's scalars when it moves.
     tapes: Vec<(Fidelity, Tape)>,
+    /// Whether `rhs` runs the running fidelity's tape or the engine (see [`tape_pays`]).
+    rhs_by_tape: bool,
     /// The running fidelity's Jacobian as tapes of [`tape::JET_WIDTH`] columns each, recorded
     /// at first use (explicit integrators never ask); `None` inside if not recorded.
     jacobian_tapes: OnceLock<Option<Vec<Tape>>>,
+}
+
+/// Sizes of a recorded tape against the engine it replaces ([`CompiledModel::tape_size`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TapeSize {
+    /// Operations on the tape (after folding, sharing and dead-code removal; a dense solve
+    /// counts one).
+    pub ops: usize,
+    /// Arithmetic the generic engine performs for the same outputs (a dense solve by its
+    /// elimination's count).
+    pub engine_ops: usize,
+    /// Whether the model evaluates by the tape (see [`tape_pays`]).
+    pub used: bool,
+}
+
+/// How many of the engine's operations one tape operation must replace before the tape is the
+/// faster way: an interpreted operation (a dispatch, two loads, a store) costs a few native
+/// ones, which the engine runs several at a time. Measured, not guessed:
+/// `cargo bench -p gyro-sim --bench handwritten` prints both sides and the counts per case;
+/// the right-hand side's tape of Foucault's gyroscope (31 operations for the engine's 400-odd)
+/// runs twice as fast as the engine, the Anschütz 1906's (881 for 1 800-odd) twice as slow.
+const RHS_TAPE_MIN_RATIO: f64 = 4.0;
+/// The same for the Jacobian tapes, whose engine side runs eight dual-number lanes per
+/// operation.
+const JACOBIAN_TAPE_MIN_RATIO: f64 = 4.0;
+
+/// Whether a tape of these sizes runs faster than the engine (a deterministic rule on the
+/// counts, not a timing: a Jacobian tape agrees with the engine to 1e-13, not to the bit, and a
+/// run must not depend on how busy the machine was when it compiled).
+fn tape_pays(tape_ops: usize, engine_ops: usize, min_ratio: f64) -> bool {
+    engine_ops as f64 >= min_ratio * tape_ops as f64
 }
 
 /// The spin motors a run simulates (none unless the effect is on): one per rotor with a motor.
@@ -506,6 +539,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             x_equilibrium: Vec::new(),
             x0: Vec::new(),
             tapes: Vec::new(),
+            rhs_by_tape: false,
             jacobian_tapes: OnceLock::new(),
         };
         let mut x = model.initial_state(&opts.initial)?;
@@ -554,6 +588,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             "tape differs from the engine: {by_tape:?} vs {generic:?}"
         );
         if ok_tape == ok_generic && same {
+            self.rhs_by_tape = tape_pays(tape.len(), tape.raw_len(), RHS_TAPE_MIN_RATIO);
             self.tapes.push((fidelity, tape));
         }
     }
@@ -582,7 +617,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         if self.fidelity == Fidelity::Linear {
             return None;
         }
-        self.tape(self.fidelity)?;
+        self.recorded_tape(self.fidelity)?;
         let (fidelity, at, inputs) = self.recording_point()?;
         let dim = at.len();
         let blocks = tape::on_large_stack(|| self.record_jacobian_blocks(fidelity, dim, &inputs));
@@ -602,6 +637,22 @@ impl<M: ShipMotion> CompiledModel<M> {
             "Jacobian tape differs from the engine by {worst:e} (scale {scale:e})"
         );
         (worst <= 1e-12 * scale).then_some(blocks)
+    }
+
+    /// The recorded Jacobian tapes, recording them on first use.
+    fn recorded_jacobian(&self) -> Option<&[Tape]> {
+        self.jacobian_tapes
+            .get_or_init(|| self.record_jacobian())
+            .as_deref()
+    }
+
+    /// Whether `jacobian` runs the recorded tapes.
+    fn jacobian_by_tape(&self) -> Option<&[Tape]> {
+        self.recorded_jacobian().filter(|b| {
+            let ops = b.iter().map(Tape::len).sum();
+            let engine_ops = b.iter().map(Tape::raw_len).sum();
+            tape_pays(ops, engine_ops, JACOBIAN_TAPE_MIN_RATIO)
+        })
     }
 
     /// The Jacobian's tapes, [`tape::JET_WIDTH`] state directions each.
@@ -662,24 +713,65 @@ impl<M: ShipMotion> CompiledModel<M> {
     }
 
     /// Operations in the Jacobian's tapes (recording them if not yet done), if recorded.
-    pub fn jacobian_tape_len(&self) -> Option<usize> {
-        self.jacobian_tapes
-            .get_or_init(|| self.record_jacobian())
-            .as_ref()
-            .map(|b| b.iter().map(Tape::len).sum())
+    /// Sizes of the running fidelity's Jacobian tapes, recording them if not yet done; `None`
+    /// if they cannot be recorded (a `linear` model, or one whose equations are not recorded).
+    pub fn jacobian_tape_size(&self) -> Option<TapeSize> {
+        let b = self.recorded_jacobian()?;
+        Some(TapeSize {
+            ops: b.iter().map(Tape::len).sum(),
+            engine_ops: b.iter().map(Tape::raw_len).sum(),
+            used: self.jacobian_by_tape().is_some(),
+        })
     }
 
-    fn tape(&self, fidelity: Fidelity) -> Option<&Tape> {
+    /// The recorded equations of a fidelity, whether or not `rhs` runs them.
+    fn recorded_tape(&self, fidelity: Fidelity) -> Option<&Tape> {
         self.tapes
             .iter()
             .find(|(f, _)| *f == fidelity)
             .map(|(_, t)| t)
     }
 
-    /// Operations in the recorded equations of a fidelity (after folding and dead-code
-    /// removal), if they are recorded.
-    pub fn tape_len(&self, fidelity: Fidelity) -> Option<usize> {
-        self.tape(fidelity).map(Tape::len)
+    /// The equations `rhs_at` runs by tape for a fidelity, if it does.
+    fn tape(&self, fidelity: Fidelity) -> Option<&Tape> {
+        self.recorded_tape(fidelity).filter(|_| self.rhs_by_tape)
+    }
+
+    /// Sizes of the recorded equations of a fidelity, if they are recorded.
+    pub fn tape_size(&self, fidelity: Fidelity) -> Option<TapeSize> {
+        self.recorded_tape(fidelity).map(|t| TapeSize {
+            ops: t.len(),
+            engine_ops: t.raw_len(),
+            used: self.tape(fidelity).is_some(),
+        })
+    }
+
+    /// ẋ by the recorded tape whether or not `rhs` uses it (`None` if not recorded): what the
+    /// tests hold to the engine.
+    pub fn rhs_tape(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Option<bool> {
+        let tape = self.recorded_tape(self.running_recorded())?;
+        let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
+        let n = self.tape_inputs(t, x, &mut inputs);
+        Some(tape.eval(&inputs[..n], dx))
+    }
+
+    /// The Jacobian by the recorded tapes whether or not `jacobian` uses them; false if they
+    /// are not recorded or a solve is singular at x.
+    pub fn jacobian_tape(&self, t: f64, x: &[f64], jac: &mut [f64]) -> bool {
+        let Some(blocks) = self.recorded_jacobian() else {
+            return false;
+        };
+        let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
+        let n = self.tape_inputs(t, x, &mut inputs);
+        Self::run_jacobian(blocks, &inputs[..n], x.len(), jac)
+    }
+
+    /// The fidelity whose equations a run records (a `linear` model's are the `full` ones).
+    fn running_recorded(&self) -> Fidelity {
+        match self.fidelity {
+            Fidelity::Linear => Fidelity::Full,
+            f => f,
+        }
     }
 
     /// The tape's inputs at (t, x): x, then the base's scalars if it moves. Returns their count.
@@ -936,11 +1028,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             jac.copy_from_slice(&self.linear_a);
             return;
         }
-        let Some(blocks) = self
-            .jacobian_tapes
-            .get_or_init(|| self.record_jacobian())
-            .as_ref()
-        else {
+        let Some(blocks) = self.jacobian_by_tape() else {
             return self.jacobian_at(self.fidelity, t, x, jac);
         };
         let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];

@@ -22,6 +22,13 @@
 //! Structural-zero tests (`x != 0` to skip a term) compare nodes: only a folded constant zero
 //! is zero, so the tape keeps every term that is not zero for every state.
 //!
+//! A tape is an interpreter's program: each operation costs a dispatch, two loads and a store,
+//! several times a native one, so a tape pays only where folding removed most of the engine's
+//! work. The recorder counts what the engine performs (`Tape::raw_len`) beside what the tape
+//! keeps (`Tape::len`), and the model runs a tape only where the ratio says it pays (see
+//! `tape_pays` in `model.rs` and the measurement behind it, `benches/handwritten.rs`). Native
+//! code generated from the tape would pay everywhere; it is not done (no JIT, no `unsafe`).
+//!
 //! Recording uses a thread-local recorder (a [`Tr`] is a node number); evaluation uses a
 //! thread-local slot buffer that grows once, so evaluating allocates nothing after the first
 //! call on a thread.
@@ -74,6 +81,9 @@ struct Recorder {
     values: Vec<f64>,
     shared: HashMap<OpKey, u32>,
     solves: Vec<SolveSpec>,
+    /// Arithmetic the engine itself performs (every operation asked for, before folding and
+    /// sharing; a solve by its elimination's count): what the tape is weighed against.
+    raw: usize,
 }
 
 /// Hashable identity of an operation (constants by their bits).
@@ -151,6 +161,7 @@ impl Recorder {
 
     /// A binary operation, folded when both operands are constants or one is an identity.
     fn binary(&mut self, op: fn(u32, u32) -> Op, a: Tr, b: Tr, v: f64) -> Tr {
+        self.raw += 1;
         let (ca, cb) = (self.is_const(a.id), self.is_const(b.id));
         if ca.is_some() && cb.is_some() {
             return self.constant(v);
@@ -175,6 +186,7 @@ impl Recorder {
     }
 
     fn unary(&mut self, op: fn(u32) -> Op, a: Tr, v: f64) -> Tr {
+        self.raw += 1;
         if self.is_const(a.id).is_some() {
             return self.constant(v);
         }
@@ -298,6 +310,8 @@ impl Real for Tr {
         }
         solve_values(&mut av, &mut bv, n, spd_first);
         with_recorder(|r| {
+            // Elimination and substitution: n³/3 + n² multiply-adds.
+            r.raw += 2 * (n * n * n / 3 + n * n);
             let s = r.solves.len() as u32;
             r.solves.push(SolveSpec {
                 n,
@@ -337,6 +351,8 @@ pub(crate) struct Tape {
     /// Slots of the outputs.
     outputs: Vec<u32>,
     n_slots: usize,
+    /// The operations the engine performs for the same outputs (see `Recorder::raw`).
+    raw_ops: usize,
 }
 
 /// Runs `f` (a recording) on a thread with a large stack: the engine keeps its dual-number
@@ -372,7 +388,11 @@ pub(crate) fn record(at: &[f64], n_outputs: usize, f: impl FnOnce(&[Tr], &mut [T
     let rec = RECORDER
         .with(|r| r.borrow_mut().take())
         .expect("the recorder is still installed");
-    compact(rec, at.len(), &outputs)
+    let raw = rec.raw;
+    Tape {
+        raw_ops: raw,
+        ..compact(rec, at.len(), &outputs)
+    }
 }
 
 /// Drops dead nodes and numbers slots: constants, inputs, then operations in recording order.
@@ -478,6 +498,7 @@ fn compact(rec: Recorder, n_inputs: usize, outputs: &[Tr]) -> Tape {
         solves,
         outputs: outputs.iter().map(|o| slot[o.id as usize]).collect(),
         n_slots: next,
+        raw_ops: 0,
     }
 }
 
@@ -485,6 +506,11 @@ impl Tape {
     /// Operations after folding and dead-code removal (a solve counts one).
     pub(crate) fn len(&self) -> usize {
         self.ops.len()
+    }
+
+    /// The operations the generic engine performs for the same outputs.
+    pub(crate) fn raw_len(&self) -> usize {
+        self.raw_ops
     }
 
     /// Evaluates the tape at `inputs` into `out`, in `slots` (resized as needed). False if a

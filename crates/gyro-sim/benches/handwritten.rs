@@ -1,6 +1,7 @@
-//! The engine's overhead as a ratio measured in one run: the engine's `rhs` and `jacobian`
-//! (the model's recorded tapes), and the generic engine they are recorded from (`rhs_engine`,
-//! `jacobian_engine`: the cost before the tape, printed beside each ratio), against hand-written equations of the same compass (`gyro_sim::accuracy::handwritten`, held
+//! The engine's overhead as a ratio measured in one run: the engine's `rhs` and `jacobian` (what
+//! a run calls: the recorded tape where it pays, the generic engine elsewhere), the recorded
+//! tapes alone (`rhs_tape`, `jacobian_tape`) and the generic engine they are recorded from
+//! (`rhs_engine`, `jacobian_engine`), against hand-written equations of the same compass (`gyro_sim::accuracy::handwritten`, held
 //! to the engine to rounding by `tests/handwritten.rs`), at each scene's initial state, for
 //! Foucault's azimuth gyroscope (`foucault-azimuth-45n`, full) and the Anschütz 1906
 //! (`harbour-50n`, gyroscopic and full); and a whole Villarceau run (the accuracy study's
@@ -13,6 +14,11 @@
 //! targets (RHS and Jacobian ≤ 3×, whole run ≤ 1.5×). The hand-written Anschütz Jacobians are
 //! forward-mode duals through the hand-written RHS, not closed forms: a closed form would be
 //! cheaper, so those two ratios flatter the engine.
+//!
+//! Then the tape against the engine on compasses without hand-written equations (a moving base,
+//! the Sperry 1911, the twin-gyro, the three-gyro with its tank), with each tape's operation
+//! count and the engine's: the measurement behind the model's rule for when a tape pays
+//! (`RHS_TAPE_MIN_RATIO`, `JACOBIAN_TAPE_MIN_RATIO` in `gyro-model/src/model.rs`).
 //!
 //! `cargo bench -p gyro-sim --bench handwritten`
 
@@ -78,7 +84,7 @@ fn scene(name: &str, fidelity: Fidelity) -> Result<(Simulation, f64), String> {
 struct Case {
     label: String,
     sim: Simulation,
-    hand: Box<dyn OdeSystem>,
+    hand: Option<Box<dyn OdeSystem>>,
 }
 
 fn cases() -> Result<Vec<Case>, String> {
@@ -88,7 +94,7 @@ fn cases() -> Result<Vec<Case>, String> {
     out.push(Case {
         label: "foucault-azimuth-45n/full".into(),
         sim,
-        hand: Box::new(hand),
+        hand: Some(Box::new(hand)),
     });
     for fidelity in [Fidelity::Gyroscopic, Fidelity::Full] {
         let (sim, lat) = scene("harbour-50n", fidelity)?;
@@ -96,7 +102,24 @@ fn cases() -> Result<Vec<Case>, String> {
         out.push(Case {
             label: format!("harbour-50n/{fidelity}"),
             sim,
-            hand: Box::new(hand),
+            hand: Some(Box::new(hand)),
+        });
+    }
+    // The tape against the engine only: the calibration of when a tape pays.
+    for (name, fidelity) in [
+        ("turn-90", Fidelity::Gyroscopic),
+        ("turn-90", Fidelity::Full),
+        ("sperry-harbour-35n", Fidelity::Full),
+        ("sperry-turn-90", Fidelity::Gyroscopic),
+        ("twin-harbour-35n", Fidelity::Full),
+        ("three-gyro-harbour-35n", Fidelity::Gyroscopic),
+        ("three-gyro-harbour-35n", Fidelity::Full),
+    ] {
+        let (sim, _) = scene(name, fidelity)?;
+        out.push(Case {
+            label: format!("{name}/{fidelity}"),
+            sim,
+            hand: None,
         });
     }
     Ok(out)
@@ -184,30 +207,40 @@ fn main() {
         let dim = x.len();
         let mut dx = vec![0.0; dim];
         let mut jac = vec![0.0; dim * dim];
-        for side in ["engine", "generic", "hand-written"] {
+        for side in ["engine", "tape", "generic", "hand-written"] {
+            if side == "hand-written" && hand.is_none() {
+                continue;
+            }
             let key = format!("{label}/rhs/{side}");
             group.bench_function(&key, |b| {
                 samples.bench(b, &clock, &key, || {
                     if side == "engine" {
                         black_box(m.rhs(black_box(1.0), black_box(&x), &mut dx));
+                    } else if side == "tape" {
+                        black_box(m.rhs_tape(black_box(1.0), black_box(&x), &mut dx));
                     } else if side == "generic" {
                         black_box(m.rhs_engine(black_box(1.0), black_box(&x), &mut dx));
-                    } else {
+                    } else if let Some(hand) = hand {
                         hand.rhs(black_box(1.0), black_box(&x), &mut dx);
                     }
                     black_box(&dx);
                 })
             });
         }
-        for side in ["engine", "generic", "hand-written"] {
+        for side in ["engine", "tape", "generic", "hand-written"] {
+            if side == "hand-written" && hand.is_none() {
+                continue;
+            }
             let key = format!("{label}/jacobian/{side}");
             group.bench_function(&key, |b| {
                 samples.bench(b, &clock, &key, || {
                     if side == "engine" {
                         m.jacobian(black_box(1.0), black_box(&x), &mut jac);
+                    } else if side == "tape" {
+                        black_box(m.jacobian_tape(black_box(1.0), black_box(&x), &mut jac));
                     } else if side == "generic" {
                         m.jacobian_engine(black_box(1.0), black_box(&x), &mut jac);
-                    } else {
+                    } else if let Some(hand) = hand {
                         hand.jacobian(black_box(1.0), black_box(&x), &mut jac);
                     }
                     black_box(&jac);
@@ -268,7 +301,7 @@ fn main() {
             h / div
         );
     };
-    for case in &cases {
+    for case in cases.iter().filter(|c| c.hand.is_some()) {
         for what in ["rhs", "jacobian"] {
             row(&format!("{}/{what}", case.label), "ns", 1.0, TARGET_EVAL);
         }
@@ -283,4 +316,45 @@ fn main() {
         "villarceau-large: {} vs {} RHS calls, {} vs {} steps (engine vs hand-written); end states differ by {gap:.1e}",
         se.rhs_evals, sh.rhs_evals, se.steps, sh.steps
     );
+
+    // When a tape pays: its time against the engine's, beside the operation counts the model's
+    // rule decides on (engine operations per tape operation).
+    println!("\ntape / generic engine, thread CPU time per call, and the counts the rule reads:");
+    println!(
+        "{:<44} {:>11} {:>11} {:>7} {:>8} {:>9} {:>7}  rule",
+        "case", "tape", "generic", "ratio", "tape ops", "engine", "e/t"
+    );
+    for case in &cases {
+        let m = &case.sim.model;
+        let sizes = [
+            ("rhs", m.tape_size(m.fidelity)),
+            ("jacobian", m.jacobian_tape_size()),
+        ];
+        for (what, size) in sizes {
+            let key = format!("{}/{what}", case.label);
+            let (Some(t), Some(g), Some(size)) = (
+                samples.mean(&format!("{key}/tape")),
+                samples.mean(&format!("{key}/generic")),
+                size,
+            ) else {
+                continue;
+            };
+            let faster = t < g;
+            let verdict = match (size.used, faster) {
+                (true, true) | (false, false) => "right",
+                (true, false) => "wrong: the tape is slower",
+                (false, true) => "wrong: the tape is faster",
+            };
+            println!(
+                "{key:<44} {:>8.1} ns {:>8.1} ns {:>6.2}× {:>8} {:>9} {:>7.1}  {} ({verdict})",
+                t,
+                g,
+                t / g,
+                size.ops,
+                size.engine_ops,
+                size.engine_ops as f64 / size.ops as f64,
+                if size.used { "tape" } else { "engine" },
+            );
+        }
+    }
 }
