@@ -24,10 +24,12 @@
 //!
 //! A tape is an interpreter's program: each operation costs a dispatch, two loads and a store,
 //! several times a native one, so a tape pays only where folding removed most of the engine's
-//! work. The recorder counts what the engine performs (`Tape::raw_len`) beside what the tape
-//! keeps (`Tape::len`), and the model runs a tape only where the ratio says it pays (see
-//! `tape_pays` in `model.rs` and the measurement behind it, `benches/handwritten.rs`). Native
-//! code generated from the tape would pay everywhere; it is not done (no JIT, no `unsafe`).
+//! work. The model runs a tape only where it pays: the right-hand side's by a timing at compile
+//! (it equals the engine to the bit, so the choice cannot change a run), the Jacobian's by the
+//! ratio of what the engine performs (`Tape::raw_len`, counted while recording) to what the tape
+//! keeps (`Tape::len`); see `rhs_tape_pays` and `jacobian_tape_pays` in `model.rs` and the
+//! measurement behind them, `benches/handwritten.rs`. Native code generated from the tape would
+//! pay everywhere; it is not done (no JIT, no `unsafe`).
 //!
 //! Recording uses a thread-local recorder (a [`Tr`] is a node number); evaluation uses a
 //! thread-local slot buffer that grows once, so evaluating allocates nothing after the first

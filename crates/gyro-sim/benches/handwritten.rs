@@ -17,8 +17,9 @@
 //!
 //! Then the tape against the engine on compasses without hand-written equations (a moving base,
 //! the Sperry 1911, the twin-gyro, the three-gyro with its tank), with each tape's operation
-//! count and the engine's: the measurement behind the model's rule for when a tape pays
-//! (`RHS_TAPE_MIN_RATIO`, `JACOBIAN_TAPE_MIN_RATIO` in `gyro-model/src/model.rs`).
+//! count and the engine's: the measurement behind the model's choices of when a tape pays
+//! (`rhs_tape_pays`, a timing at compile; `JACOBIAN_TAPE_MIN_RATIO`, a rule on the counts; both
+//! in `gyro-model/src/model.rs`).
 //!
 //! `cargo bench -p gyro-sim --bench handwritten`
 

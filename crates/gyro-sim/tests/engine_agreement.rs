@@ -160,7 +160,11 @@ fn compare<M: ShipMotion>(
         "{label}: rhs {e_rhs:.1e}, jacobian {e_jac:.1e} (relative to each block's largest term); tape {} operations for the engine's {} ({})",
         tape.ops,
         tape.engine_ops,
-        if tape.used { "runs" } else { "kept for the tests" }
+        if tape.used {
+            "runs"
+        } else {
+            "kept for the tests"
+        }
     );
     (e_rhs, e_jac)
 }
