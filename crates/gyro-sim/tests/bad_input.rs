@@ -146,6 +146,34 @@ fn unknown_effect_and_fidelity_are_refused() {
     );
     let e = scene_error(&scene("50.0", "integrator = \"euler\"", ""));
     assert!(e.message.contains("rodas4"), "{e}");
+    // Checked when the file loads, though this run is gyroscopic and would never use it.
+    let text = scene("50.0", "full_integrator = \"euler\"", "");
+    let e = scene_error(&text);
+    assert!(
+        e.message.contains("rodas4") && e.key == "simulation.full_integrator",
+        "{e}"
+    );
+    assert_eq!(e.line, Some(line_of(&text, "full_integrator")), "{e}");
+}
+
+/// `full_integrator` is what a scene runs at `full` fidelity, from the file or the command line;
+/// the other fidelities keep `integrator`, and `--integrator` overrides both.
+#[test]
+fn full_fidelity_runs_the_scenes_full_integrator() {
+    use gyro_model::Fidelity;
+    use gyro_sim::solvers::Method;
+    let load = |ov: SceneOverrides| Scene::load("rolling-intercardinal", &ov).expect("loads");
+    assert_eq!(load(SceneOverrides::default()).method, Method::Dop853);
+    let full = SceneOverrides {
+        fidelity: Some(Fidelity::Full),
+        ..Default::default()
+    };
+    assert_eq!(load(full.clone()).method, Method::Rodas4);
+    let asked = SceneOverrides {
+        method: Some(Method::Radau5),
+        ..full
+    };
+    assert_eq!(load(asked).method, Method::Radau5);
 }
 
 #[test]
