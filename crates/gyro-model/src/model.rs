@@ -389,13 +389,14 @@ pub struct TapeSize {
 }
 
 /// How many of the engine's operations one Jacobian tape operation must replace before the
-/// tape is the faster way. An interpreted operation (a dispatch, two loads, a store) costs
-/// 2–3 ns here, an engine operation 0.12–0.23 ns (the engine runs eight dual-number lanes at
-/// once and skips zeros the recording cannot prove zero). Measured, not guessed:
-/// `cargo bench -p gyro-sim --bench handwritten` prints both times and both counts for ten
-/// models; at 18 the rule picks the faster side in all ten (the tape ran faster from 18.6
-/// engine operations per tape operation up, slower at 17.5 and below).
-const JACOBIAN_TAPE_MIN_RATIO: f64 = 18.0;
+/// tape is the faster way. An interpreted operation (a dispatch, loads, a store) costs ≈ 2 ns
+/// here, an engine operation 0.12–0.23 ns (the engine runs eight dual-number lanes at once and
+/// skips zeros the recording cannot prove zero). Measured, not guessed: `cargo bench -p gyro-sim
+/// --bench handwritten` prints both times and both counts for ten models. The counts do not
+/// separate them perfectly (the tape ran faster at 16.2 engine operations per tape operation,
+/// slower at 14.9 and at 21.0); at 16 the rule picks the faster side in nine of ten, and the
+/// tenth (the Sperry 1911 on a moving base, gyroscopic) runs the tape 7 % slower.
+const JACOBIAN_TAPE_MIN_RATIO: f64 = 16.0;
 
 /// Whether Jacobian tapes of these sizes run faster than the engine. A rule on the counts,
 /// not a timing: the tapes agree with the engine to 1e-13, not to the bit, and a run must not
@@ -406,9 +407,10 @@ fn jacobian_tape_pays(tape_ops: usize, engine_ops: usize) -> bool {
 
 /// Whether the right-hand side's tape runs faster than the engine, timed at compile (best of
 /// seven rounds each, alternated, a fraction of a millisecond to a few). The counts do not
-/// decide it (Foucault's tape wins 1.6× at 15 engine operations per tape operation, the
-/// three-gyro's `full` tape loses 1.4× at 17); a timing may, because the tape's result equals
-/// the engine's to the bit: whichever runs, the run is the same.
+/// decide it (the twin-gyro's tape ties the engine at 11 engine operations per tape operation,
+/// the Anschütz 1906's loses 1.6× at 7 and the three-gyro's wins 1.3× at 30); a timing may,
+/// because the tape's result equals the engine's to the bit: whichever runs, the run is the
+/// same.
 fn rhs_tape_pays(mut tape: impl FnMut(), mut engine: impl FnMut()) -> bool {
     const CALLS: usize = 16;
     let mut best = [f64::INFINITY; 2];

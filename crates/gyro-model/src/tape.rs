@@ -63,6 +63,18 @@ enum Op {
     SolveOut(u32, u32),
     /// Dense solve `s`: writes its n solution components to this slot and the n − 1 after.
     Solve(u32),
+    // Fused forms (tapes only): a product used once, by a sum or difference, is computed where
+    // it is used. Two roundings each, as unfused: `x·y + c` is not an FMA.
+    /// x·y + c
+    MulAdd(u32, u32, u32),
+    /// x·y − c
+    MulSub(u32, u32, u32),
+    /// c − x·y
+    SubMul(u32, u32, u32),
+    /// x·y + z·w
+    MulMulAdd(u32, u32, u32, u32),
+    /// x·y − z·w
+    MulMulSub(u32, u32, u32, u32),
 }
 
 /// A recorded dense solve A x = b of the leading n×n block.
@@ -108,7 +120,13 @@ impl OpKey {
             Op::Sqrt(a) => OpKey(9, a as u64, 0),
             Op::Atan2(a, b) => OpKey(10, a as u64, b),
             Op::Asin(a) => OpKey(11, a as u64, 0),
-            Op::SolveOut(..) | Op::Solve(_) => return None,
+            Op::SolveOut(..)
+            | Op::Solve(_)
+            | Op::MulAdd(..)
+            | Op::MulSub(..)
+            | Op::SubMul(..)
+            | Op::MulMulAdd(..)
+            | Op::MulMulSub(..) => return None,
         })
     }
 }
@@ -397,6 +415,55 @@ pub(crate) fn record(at: &[f64], n_outputs: usize, f: impl FnOnce(&[Tr], &mut [T
     }
 }
 
+/// The live products used exactly once, by a sum or a difference: those are computed inside
+/// their user (`Op::MulAdd` and kin), one dispatch instead of two, same roundings.
+fn fusable_products(
+    rec: &Recorder,
+    live: &[bool],
+    solve_live: &[bool],
+    outputs: &[Tr],
+) -> Vec<bool> {
+    const ELSEWHERE: u32 = u32::MAX;
+    let n = rec.ops.len();
+    let mut uses = vec![0u32; n];
+    let mut user = vec![ELSEWHERE; n];
+    let mut used_by = |x: u32, by: u32| {
+        uses[x as usize] += 1;
+        user[x as usize] = by;
+    };
+    for o in outputs {
+        used_by(o.id, ELSEWHERE);
+    }
+    for (s, spec) in rec.solves.iter().enumerate() {
+        if solve_live[s] {
+            for &x in spec.a.iter().chain(&spec.b) {
+                used_by(x, ELSEWHERE);
+            }
+        }
+    }
+    for id in (0..n).filter(|&id| live[id]) {
+        match rec.ops[id] {
+            Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
+                used_by(a, id as u32);
+                used_by(b, id as u32);
+            }
+            Op::Neg(a) | Op::Sin(a) | Op::Cos(a) | Op::Sqrt(a) | Op::Asin(a) => {
+                used_by(a, id as u32)
+            }
+            _ => {}
+        }
+    }
+    (0..n)
+        .map(|id| {
+            live[id]
+                && matches!(rec.ops[id], Op::Mul(..))
+                && uses[id] == 1
+                && user[id] != ELSEWHERE
+                && matches!(rec.ops[user[id] as usize], Op::Add(..) | Op::Sub(..))
+        })
+        .collect()
+}
+
 /// Drops dead nodes and numbers slots: constants, inputs, then operations in recording order.
 fn compact(rec: Recorder, n_inputs: usize, outputs: &[Tr]) -> Tape {
     let n = rec.ops.len();
@@ -417,6 +484,13 @@ fn compact(rec: Recorder, n_inputs: usize, outputs: &[Tr]) -> Tape {
                 mark(b);
             }
             Op::Neg(a) | Op::Sin(a) | Op::Cos(a) | Op::Sqrt(a) | Op::Asin(a) => mark(a),
+            Op::MulAdd(..)
+            | Op::MulSub(..)
+            | Op::SubMul(..)
+            | Op::MulMulAdd(..)
+            | Op::MulMulSub(..) => {
+                unreachable!("fused forms are made by compact, not recorded")
+            }
             Op::SolveOut(s, _) => {
                 if !solve_live[s as usize] {
                     solve_live[s as usize] = true;
@@ -436,6 +510,7 @@ fn compact(rec: Recorder, n_inputs: usize, outputs: &[Tr]) -> Tape {
             live[id] = true;
         }
     }
+    let fused = fusable_products(&rec, &live, &solve_live, outputs);
     let mut slot = vec![u32::MAX; n];
     let mut consts = Vec::new();
     for id in 0..n {
@@ -458,12 +533,31 @@ fn compact(rec: Recorder, n_inputs: usize, outputs: &[Tr]) -> Tape {
         if !live[id] {
             continue;
         }
+        if fused[id] {
+            continue; // computed where it is used
+        }
         let op = rec.ops[id];
         let s = |x: u32| slot[x as usize];
+        // The factors of operand `x` if it is a product fused into this operation.
+        let product = |x: u32| match rec.ops[x as usize] {
+            Op::Mul(p, q) if fused[x as usize] => Some((s(p), s(q))),
+            _ => None,
+        };
         let mapped = match op {
             Op::Const(_) | Op::Input(_) | Op::Solve(_) => continue,
-            Op::Add(a, b) => Op::Add(s(a), s(b)),
-            Op::Sub(a, b) => Op::Sub(s(a), s(b)),
+            Op::Add(a, b) => match (product(a), product(b)) {
+                (Some((x, y)), Some((z, w))) => Op::MulMulAdd(x, y, z, w),
+                (Some((x, y)), None) => Op::MulAdd(x, y, s(b)),
+                // c + x·y = x·y + c exactly: IEEE addition commutes.
+                (None, Some((x, y))) => Op::MulAdd(x, y, s(a)),
+                (None, None) => Op::Add(s(a), s(b)),
+            },
+            Op::Sub(a, b) => match (product(a), product(b)) {
+                (Some((x, y)), Some((z, w))) => Op::MulMulSub(x, y, z, w),
+                (Some((x, y)), None) => Op::MulSub(x, y, s(b)),
+                (None, Some((x, y))) => Op::SubMul(s(a), x, y),
+                (None, None) => Op::Sub(s(a), s(b)),
+            },
             Op::Mul(a, b) => Op::Mul(s(a), s(b)),
             Op::Div(a, b) => Op::Div(s(a), s(b)),
             Op::Atan2(a, b) => Op::Atan2(s(a), s(b)),
@@ -472,6 +566,13 @@ fn compact(rec: Recorder, n_inputs: usize, outputs: &[Tr]) -> Tape {
             Op::Cos(a) => Op::Cos(s(a)),
             Op::Sqrt(a) => Op::Sqrt(s(a)),
             Op::Asin(a) => Op::Asin(s(a)),
+            Op::MulAdd(..)
+            | Op::MulSub(..)
+            | Op::SubMul(..)
+            | Op::MulMulAdd(..)
+            | Op::MulMulSub(..) => {
+                unreachable!("fused forms are made here, not recorded")
+            }
             Op::SolveOut(sv, k) => {
                 if k == 0 {
                     let spec = &rec.solves[sv as usize];
@@ -539,6 +640,15 @@ impl Tape {
                 Op::Sqrt(a) => s[a as usize].sqrt(),
                 Op::Atan2(a, b) => s[a as usize].atan2(s[b as usize]),
                 Op::Asin(a) => s[a as usize].asin(),
+                Op::MulAdd(x, y, c) => s[x as usize] * s[y as usize] + s[c as usize],
+                Op::MulSub(x, y, c) => s[x as usize] * s[y as usize] - s[c as usize],
+                Op::SubMul(c, x, y) => s[c as usize] - s[x as usize] * s[y as usize],
+                Op::MulMulAdd(x, y, z, w) => {
+                    s[x as usize] * s[y as usize] + s[z as usize] * s[w as usize]
+                }
+                Op::MulMulSub(x, y, z, w) => {
+                    s[x as usize] * s[y as usize] - s[z as usize] * s[w as usize]
+                }
                 Op::Solve(i) => {
                     let spec = &self.solves[i as usize];
                     if !self.solve(spec, slots, k) {
