@@ -372,7 +372,15 @@ pub struct CompiledModel<M: ShipMotion> {
     rhs_by_tape: bool,
     /// The running fidelity's Jacobian as tapes of [`tape::JET_WIDTH`] columns each, recorded
     /// at first use (explicit integrators never ask); `None` inside if not recorded.
-    jacobian_tapes: OnceLock<Option<Vec<Tape>>>,
+    jacobian_tapes: OnceLock<Option<JacobianTapes>>,
+}
+
+/// The running fidelity's Jacobian tapes and whether `jacobian` runs them (decided once, when
+/// they are recorded: [`jacobian_tape_pays`]).
+#[derive(Clone, Debug)]
+struct JacobianTapes {
+    blocks: Vec<Tape>,
+    used: bool,
 }
 
 /// Sizes of a recorded tape against the engine it replaces ([`CompiledModel::tape_size`]).
@@ -676,20 +684,24 @@ impl<M: ShipMotion> CompiledModel<M> {
         (worst <= 1e-12 * scale).then_some(blocks)
     }
 
-    /// The recorded Jacobian tapes, recording them on first use.
-    fn recorded_jacobian(&self) -> Option<&[Tape]> {
+    /// The recorded Jacobian tapes, recording them (and deciding whether they run) on first use.
+    fn recorded_jacobian(&self) -> Option<&JacobianTapes> {
         self.jacobian_tapes
-            .get_or_init(|| self.record_jacobian())
-            .as_deref()
+            .get_or_init(|| {
+                let blocks = self.record_jacobian()?;
+                let ops = blocks.iter().map(Tape::len).sum();
+                let engine_ops = blocks.iter().map(Tape::raw_len).sum();
+                let used = jacobian_tape_pays(ops, engine_ops);
+                Some(JacobianTapes { blocks, used })
+            })
+            .as_ref()
     }
 
-    /// Whether `jacobian` runs the recorded tapes.
+    /// The Jacobian tapes if `jacobian` runs them.
     fn jacobian_by_tape(&self) -> Option<&[Tape]> {
-        self.recorded_jacobian().filter(|b| {
-            let ops = b.iter().map(Tape::len).sum();
-            let engine_ops = b.iter().map(Tape::raw_len).sum();
-            jacobian_tape_pays(ops, engine_ops)
-        })
+        self.recorded_jacobian()
+            .filter(|j| j.used)
+            .map(|j| &j.blocks[..])
     }
 
     /// The Jacobian's tapes, [`tape::JET_WIDTH`] state directions each.
@@ -749,15 +761,14 @@ impl<M: ShipMotion> CompiledModel<M> {
         true
     }
 
-    /// Operations in the Jacobian's tapes (recording them if not yet done), if recorded.
     /// Sizes of the running fidelity's Jacobian tapes, recording them if not yet done; `None`
     /// if they cannot be recorded (a `linear` model, or one whose equations are not recorded).
     pub fn jacobian_tape_size(&self) -> Option<TapeSize> {
-        let b = self.recorded_jacobian()?;
+        let j = self.recorded_jacobian()?;
         Some(TapeSize {
-            ops: b.iter().map(Tape::len).sum(),
-            engine_ops: b.iter().map(Tape::raw_len).sum(),
-            used: self.jacobian_by_tape().is_some(),
+            ops: j.blocks.iter().map(Tape::len).sum(),
+            engine_ops: j.blocks.iter().map(Tape::raw_len).sum(),
+            used: j.used,
         })
     }
 
@@ -795,12 +806,12 @@ impl<M: ShipMotion> CompiledModel<M> {
     /// The Jacobian by the recorded tapes whether or not `jacobian` uses them; false if they
     /// are not recorded or a solve is singular at x.
     pub fn jacobian_tape(&self, t: f64, x: &[f64], jac: &mut [f64]) -> bool {
-        let Some(blocks) = self.recorded_jacobian() else {
+        let Some(j) = self.recorded_jacobian() else {
             return false;
         };
         let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
         let n = self.tape_inputs(t, x, &mut inputs);
-        Self::run_jacobian(blocks, &inputs[..n], x.len(), jac)
+        Self::run_jacobian(&j.blocks, &inputs[..n], x.len(), jac)
     }
 
     /// The fidelity whose equations a run records (a `linear` model's are the `full` ones).
