@@ -31,6 +31,7 @@ mod expr;
 mod force_elements;
 pub mod linalg;
 mod model;
+mod native;
 mod reference_engine;
 mod tape;
 pub mod theory;
@@ -44,5 +45,5 @@ pub use earth::{BaseEffects, Moored, ShipKinematics, ShipMotion};
 pub use error::InputError;
 pub use model::{
     BodyPose, CompiledModel, EFFECT_NAMES, Effects, Energetics, Fidelity, InitialCondition,
-    ModelError, ModelOptions, Readout, TapeSize,
+    ModelError, ModelOptions, Readout, TapeSize, native_source,
 };

@@ -394,6 +394,17 @@ pub struct TapeSize {
     pub engine_ops: usize,
     /// Whether the model evaluates by the tape ([`rhs_tape_pays`], [`jacobian_tape_pays`]).
     pub used: bool,
+    /// Whether the tape runs as native code generated ahead of time (`crate::native`; all of
+    /// a Jacobian's tapes, for a Jacobian).
+    pub native: bool,
+}
+
+/// The text of `gyro-model/src/native/generated.rs` for these models: native code for every
+/// tape they record (right-hand sides and Jacobians), one function per distinct shape. The
+/// generator behind `tests/native_code.rs` in `gyro-sim`; see `crate::native`.
+pub fn native_source<M: ShipMotion>(models: &[&CompiledModel<M>]) -> String {
+    let tapes: Vec<&Tape> = models.iter().flat_map(|m| m.all_tapes()).collect();
+    crate::native::source(&tapes)
 }
 
 /// How many of the engine's operations one Jacobian tape operation must replace before the
@@ -691,7 +702,9 @@ impl<M: ShipMotion> CompiledModel<M> {
                 let blocks = self.record_jacobian()?;
                 let ops = blocks.iter().map(Tape::len).sum();
                 let engine_ops = blocks.iter().map(Tape::raw_len).sum();
-                let used = jacobian_tape_pays(ops, engine_ops);
+                // Native code runs fewer operations than the engine, each as fast.
+                let used =
+                    blocks.iter().all(Tape::is_native) || jacobian_tape_pays(ops, engine_ops);
                 Some(JacobianTapes { blocks, used })
             })
             .as_ref()
@@ -769,6 +782,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             ops: j.blocks.iter().map(Tape::len).sum(),
             engine_ops: j.blocks.iter().map(Tape::raw_len).sum(),
             used: j.used,
+            native: j.blocks.iter().all(Tape::is_native),
         })
     }
 
@@ -791,6 +805,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             ops: t.len(),
             engine_ops: t.raw_len(),
             used: self.tape(fidelity).is_some(),
+            native: t.is_native(),
         })
     }
 
@@ -803,6 +818,15 @@ impl<M: ShipMotion> CompiledModel<M> {
         Some(tape.eval(&inputs[..n], dx))
     }
 
+    /// ẋ by the recorded tape's interpreter, even where native code runs it: what the tests
+    /// hold the native code to (`None` if not recorded).
+    pub fn rhs_tape_interpreted(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Option<bool> {
+        let tape = self.recorded_tape(self.running_recorded())?;
+        let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
+        let n = self.tape_inputs(t, x, &mut inputs);
+        Some(tape.interpret(&inputs[..n], dx))
+    }
+
     /// The Jacobian by the recorded tapes whether or not `jacobian` uses them; false if they
     /// are not recorded or a solve is singular at x.
     pub fn jacobian_tape(&self, t: f64, x: &[f64], jac: &mut [f64]) -> bool {
@@ -812,6 +836,16 @@ impl<M: ShipMotion> CompiledModel<M> {
         let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
         let n = self.tape_inputs(t, x, &mut inputs);
         Self::run_jacobian(&j.blocks, &inputs[..n], x.len(), jac)
+    }
+
+    /// Every tape recorded for this model: each fidelity's right-hand side and the running
+    /// fidelity's Jacobian (recorded now if not yet). What [`native_source`] writes out.
+    fn all_tapes(&self) -> Vec<&Tape> {
+        let mut all: Vec<&Tape> = self.tapes.iter().map(|(_, t)| t).collect();
+        if let Some(j) = self.recorded_jacobian() {
+            all.extend(&j.blocks);
+        }
+        all
     }
 
     /// The fidelity whose equations a run records (a `linear` model's are the `full` ones).
@@ -858,6 +892,7 @@ impl<M: ShipMotion> CompiledModel<M> {
     /// ẋ of a fidelity: by its tape when recorded, by the generic engine otherwise.
     fn rhs_at(&self, fidelity: Fidelity, t: f64, x: &[f64], dx: &mut [f64]) -> bool {
         match self.tape(fidelity) {
+            Some(tape) if self.stationary.is_some() => tape.eval(x, dx),
             Some(tape) => {
                 let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
                 let n = self.tape_inputs(t, x, &mut inputs);

@@ -28,8 +28,9 @@
 //! (it equals the engine to the bit, so the choice cannot change a run), the Jacobian's by the
 //! ratio of what the engine performs (`Tape::raw_len`, counted while recording) to what the tape
 //! keeps (`Tape::len`); see `rhs_tape_pays` and `jacobian_tape_pays` in `model.rs` and the
-//! measurement behind them, `benches/handwritten.rs`. Native code generated from the tape would
-//! pay everywhere; it is not done (no JIT, no `unsafe`).
+//! measurement behind them, `benches/handwritten.rs`. Native code pays everywhere: the shipped
+//! designs' tapes are also compiled ahead of time (`crate::native`), and a tape whose shape has
+//! native code runs it instead of the interpreter (no JIT: no `unsafe` in this workspace).
 //!
 //! Recording uses a thread-local recorder (a [`Tr`] is a node number); evaluation uses a
 //! thread-local slot buffer that grows once, so evaluating allocates nothing after the first
@@ -349,7 +350,7 @@ impl Real for Tr {
 
 /// The engine's dense solve on any scalar (LDLᵀ first when asked, as the engine does for a
 /// mass matrix, pivoted elimination otherwise or if that fails). False if singular.
-fn solve_values<T: Real, const N: usize>(
+pub(crate) fn solve_values<T: Real, const N: usize>(
     a: &mut [[T; N]; N],
     b: &mut [T; N],
     n: usize,
@@ -373,7 +374,15 @@ pub(crate) struct Tape {
     n_slots: usize,
     /// The operations the engine performs for the same outputs (see `Recorder::raw`).
     raw_ops: usize,
+    /// Fingerprint of everything but the constants' values ([`Tape::shape`]).
+    shape: u64,
+    /// Native code generated ahead of time for a tape of this shape, if any (`crate::native`).
+    native: Option<NativeFn>,
 }
+
+/// A tape compiled to Rust ahead of time: (constants, inputs, outputs) → false if a solve is
+/// singular. Same operations, same order, same operands as the tape it was generated from.
+pub(crate) type NativeFn = fn(&[f64], &[f64], &mut [f64]) -> bool;
 
 /// Runs `f` (a recording) on a thread with a large stack: the engine keeps its dual-number
 /// matrices on the stack, and over the recording scalar (16 bytes, and 9 of them in a Jacobian
@@ -409,10 +418,13 @@ pub(crate) fn record(at: &[f64], n_outputs: usize, f: impl FnOnce(&[Tr], &mut [T
         .with(|r| r.borrow_mut().take())
         .expect("the recorder is still installed");
     let raw = rec.raw;
-    Tape {
+    let mut tape = Tape {
         raw_ops: raw,
         ..compact(rec, at.len(), &outputs)
-    }
+    };
+    tape.shape = tape.fingerprint();
+    tape.native = crate::native::lookup(tape.shape, tape.ops.len());
+    tape
 }
 
 /// The live products used exactly once, by a sum or a difference: those are computed inside
@@ -602,6 +614,8 @@ fn compact(rec: Recorder, n_inputs: usize, outputs: &[Tr]) -> Tape {
         outputs: outputs.iter().map(|o| slot[o.id as usize]).collect(),
         n_slots: next,
         raw_ops: 0,
+        shape: 0,
+        native: None,
     }
 }
 
@@ -705,8 +719,194 @@ impl Tape {
         true
     }
 
-    /// The outputs at `inputs` (f64). False if a solve is singular there.
+    /// The outputs at `inputs` (f64), by native code if this shape has some, by the
+    /// interpreter otherwise (the same to the bit). False if a solve is singular there.
     pub(crate) fn eval(&self, inputs: &[f64], out: &mut [f64]) -> bool {
+        match self.native {
+            Some(f) => f(&self.consts, inputs, out),
+            None => self.interpret(inputs, out),
+        }
+    }
+
+    /// The outputs at `inputs` by the interpreter, whether or not native code exists.
+    pub(crate) fn interpret(&self, inputs: &[f64], out: &mut [f64]) -> bool {
         SLOTS.with(|s| self.run(&mut s.borrow_mut(), inputs, out))
+    }
+
+    /// Whether the tape performs a dense solve.
+    pub(crate) fn has_solve(&self) -> bool {
+        !self.solves.is_empty()
+    }
+
+    /// Whether this tape runs as native code generated ahead of time.
+    pub(crate) fn is_native(&self) -> bool {
+        self.native.is_some()
+    }
+
+    /// Fingerprint of the tape's structure: operations, operands, solves, outputs and the
+    /// counts of constants and inputs, not the constants' values. Two tapes of one shape run
+    /// the same native code on their own constants (a design's numbers or a latitude change
+    /// the values, not the shape; a value that folds, such as a zero, changes the shape).
+    pub(crate) fn shape(&self) -> u64 {
+        self.shape
+    }
+
+    /// FNV-1a over the structure, in 64-bit words (stable across builds and platforms, unlike
+    /// the standard library's hasher).
+    fn fingerprint(&self) -> u64 {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |w: u64| {
+            for byte in w.to_le_bytes() {
+                h ^= byte as u64;
+                h = h.wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        for n in [
+            self.consts.len(),
+            self.n_inputs,
+            self.n_slots,
+            self.ops.len(),
+        ] {
+            eat(n as u64);
+        }
+        for op in &self.ops {
+            let (kind, operands) = op.parts();
+            eat(kind);
+            for x in operands {
+                eat(x as u64);
+            }
+        }
+        for spec in &self.solves {
+            eat(spec.n as u64);
+            eat(spec.spd_first as u64);
+            for &x in spec.a.iter().chain(&spec.b) {
+                eat(x as u64);
+            }
+        }
+        eat(self.outputs.len() as u64);
+        for &o in &self.outputs {
+            eat(o as u64);
+        }
+        h
+    }
+
+    /// The tape as a Rust function named `name` with the [`NativeFn`] signature: one `let` per
+    /// operation, in the tape's order, on the same operands (what `crate::native` holds).
+    pub(crate) fn rust_source(&self, name: &str) -> String {
+        use std::fmt::Write;
+        let nc = self.consts.len();
+        let ni = self.n_inputs;
+        let slot = |s: u32| -> String {
+            let s = s as usize;
+            if s < nc {
+                format!("c[{s}]")
+            } else if s < nc + ni {
+                format!("x[{}]", s - nc)
+            } else {
+                format!("v{s}")
+            }
+        };
+        let mut src = String::new();
+        let w = &mut src;
+        let _ = writeln!(
+            w,
+            "/// {} operations ({} by the engine).\npub(super) fn {name}(c: &[f64], x: &[f64], out: &mut [f64]) -> bool {{",
+            self.ops.len(),
+            self.raw_ops
+        );
+        let no = self.outputs.len();
+        let _ = writeln!(
+            w,
+            "    let c: &[f64; {nc}] = c.try_into().expect(\"{nc} constants\");"
+        );
+        let _ = writeln!(
+            w,
+            "    let x: &[f64; {ni}] = x.try_into().expect(\"{ni} inputs\");"
+        );
+        let _ = writeln!(
+            w,
+            "    let out: &mut [f64; {no}] = out.try_into().expect(\"{no} outputs\");"
+        );
+        let mut k = nc + ni;
+        for op in &self.ops {
+            let e = |a: u32, b: u32, o: &str| format!("{} {o} {}", slot(a), slot(b));
+            let expr = match *op {
+                Op::Add(a, b) => e(a, b, "+"),
+                Op::Sub(a, b) => e(a, b, "-"),
+                Op::Mul(a, b) => e(a, b, "*"),
+                Op::Div(a, b) => e(a, b, "/"),
+                Op::Neg(a) => format!("-{}", slot(a)),
+                Op::Sin(a) => format!("{}.sin()", slot(a)),
+                Op::Cos(a) => format!("{}.cos()", slot(a)),
+                Op::Sqrt(a) => format!("{}.sqrt()", slot(a)),
+                Op::Atan2(a, b) => format!("{}.atan2({})", slot(a), slot(b)),
+                Op::Asin(a) => format!("{}.asin()", slot(a)),
+                Op::MulAdd(x, y, c) => format!("{} + {}", e(x, y, "*"), slot(c)),
+                Op::MulSub(x, y, c) => format!("{} - {}", e(x, y, "*"), slot(c)),
+                Op::SubMul(c, x, y) => format!("{} - {}", slot(c), e(x, y, "*")),
+                Op::MulMulAdd(x, y, z, q) => format!("{} + {}", e(x, y, "*"), e(z, q, "*")),
+                Op::MulMulSub(x, y, z, q) => format!("{} - {}", e(x, y, "*"), e(z, q, "*")),
+                Op::Solve(i) => {
+                    let spec = &self.solves[i as usize];
+                    let n = spec.n;
+                    let names: Vec<String> = (k..k + n).map(|s| format!("v{s}")).collect();
+                    let rows: Vec<String> = (0..n)
+                        .map(|r| {
+                            let row: Vec<String> = spec.a[r * n..(r + 1) * n]
+                                .iter()
+                                .map(|&x| slot(x))
+                                .collect();
+                            format!("[{}]", row.join(", "))
+                        })
+                        .collect();
+                    let b: Vec<String> = spec.b.iter().map(|&x| slot(x)).collect();
+                    let _ = writeln!(
+                        w,
+                        "    let Some([{}]) = solve::<{n}>([{}], [{}], {}) else {{ return false }};",
+                        names.join(", "),
+                        rows.join(", "),
+                        b.join(", "),
+                        spec.spd_first
+                    );
+                    k += n;
+                    continue;
+                }
+                Op::Const(_) | Op::Input(_) | Op::SolveOut(..) => unreachable!("not in a tape"),
+            };
+            let _ = writeln!(w, "    let v{k} = {expr};");
+            k += 1;
+        }
+        for (i, &s) in self.outputs.iter().enumerate() {
+            let _ = writeln!(w, "    out[{i}] = {};", slot(s));
+        }
+        let _ = writeln!(w, "    true\n}}");
+        src
+    }
+}
+
+impl Op {
+    /// A kind number and the operands, for fingerprints.
+    fn parts(&self) -> (u64, Vec<u32>) {
+        match *self {
+            Op::Const(_) => (0, vec![]),
+            Op::Input(i) => (1, vec![i]),
+            Op::Add(a, b) => (2, vec![a, b]),
+            Op::Sub(a, b) => (3, vec![a, b]),
+            Op::Mul(a, b) => (4, vec![a, b]),
+            Op::Div(a, b) => (5, vec![a, b]),
+            Op::Neg(a) => (6, vec![a]),
+            Op::Sin(a) => (7, vec![a]),
+            Op::Cos(a) => (8, vec![a]),
+            Op::Sqrt(a) => (9, vec![a]),
+            Op::Atan2(a, b) => (10, vec![a, b]),
+            Op::Asin(a) => (11, vec![a]),
+            Op::SolveOut(s, k) => (12, vec![s, k]),
+            Op::Solve(s) => (13, vec![s]),
+            Op::MulAdd(x, y, c) => (14, vec![x, y, c]),
+            Op::MulSub(x, y, c) => (15, vec![x, y, c]),
+            Op::SubMul(c, x, y) => (16, vec![c, x, y]),
+            Op::MulMulAdd(x, y, z, w) => (17, vec![x, y, z, w]),
+            Op::MulMulSub(x, y, z, w) => (18, vec![x, y, z, w]),
+        }
     }
 }

@@ -13,6 +13,7 @@ mod handwritten;
 mod hard_cases;
 mod interop_recording;
 mod modes_and_stiffness;
+mod native_code;
 mod record_stats;
 mod ship;
 mod slough;
