@@ -723,7 +723,8 @@ impl<M: ShipMotion> CompiledModel<M> {
         let mut blocks = Vec::new();
         let mut first = 0;
         while first < dim {
-            blocks.push(tape::record(inputs, dim * W, |inp, out| {
+            let cols = W.min(dim - first);
+            blocks.push(tape::record(inputs, dim * cols, |inp, out| {
                 let zero = Jet::<Tr, W>::constant(Tr::cst(0.0));
                 let mut x = [zero; MAX_STATES];
                 for i in 0..dim {
@@ -748,7 +749,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                 }
                 by_width!(self.chain.n, go);
                 for row in 0..dim {
-                    out[row * W..(row + 1) * W].copy_from_slice(&dx[row].d);
+                    out[row * cols..(row + 1) * cols].copy_from_slice(&dx[row].d[..cols]);
                 }
             }));
             first += W;
@@ -757,18 +758,23 @@ impl<M: ShipMotion> CompiledModel<M> {
     }
 
     /// Runs Jacobian tapes at `inputs` into `jac` (dim×dim). False if a solve is singular.
+    /// Block b holds columns b·W.. of every row (row-major, dim × its column count); a single
+    /// block is the whole Jacobian and writes it in place.
     fn run_jacobian(blocks: &[Tape], inputs: &[f64], dim: usize, jac: &mut [f64]) -> bool {
         const W: usize = tape::JET_WIDTH;
+        if let [block] = blocks {
+            return block.eval(inputs, jac);
+        }
         let mut out = [0.0; MAX_STATES * W];
         for (b, block) in blocks.iter().enumerate() {
-            if !block.eval(inputs, &mut out[..dim * W]) {
+            let first = b * W;
+            let cols = W.min(dim - first);
+            if !block.eval(inputs, &mut out[..dim * cols]) {
                 return false;
             }
-            let first = b * W;
             for row in 0..dim {
-                for col in first..dim.min(first + W) {
-                    jac[row * dim + col] = out[row * W + col - first];
-                }
+                jac[row * dim + first..row * dim + first + cols]
+                    .copy_from_slice(&out[row * cols..(row + 1) * cols]);
             }
         }
         true
@@ -1114,9 +1120,14 @@ impl<M: ShipMotion> CompiledModel<M> {
         let Some(blocks) = self.jacobian_by_tape() else {
             return self.jacobian_at(self.fidelity, t, x, jac);
         };
-        let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
-        let n = self.tape_inputs(t, x, &mut inputs);
-        if !Self::run_jacobian(blocks, &inputs[..n], x.len(), jac) {
+        let ok = if self.stationary.is_some() {
+            Self::run_jacobian(blocks, x, x.len(), jac)
+        } else {
+            let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
+            let n = self.tape_inputs(t, x, &mut inputs);
+            Self::run_jacobian(blocks, &inputs[..n], x.len(), jac)
+        };
+        if !ok {
             // Singular at this state: the engine's own elimination says what it can.
             self.jacobian_at(self.fidelity, t, x, jac);
         }

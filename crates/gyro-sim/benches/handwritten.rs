@@ -21,6 +21,9 @@
 //! (`rhs_tape_pays`, a timing at compile; `JACOBIAN_TAPE_MIN_RATIO`, a rule on the counts; both
 //! in `gyro-model/src/model.rs`).
 //!
+//! A tape with native code (`gyro-model/src/native.rs`: the shipped Foucault and Anschütz 1906
+//! scenes) runs it on the `tape` side too; its rule column says `native`.
+//!
 //! `cargo bench -p gyro-sim --bench handwritten`
 
 #[path = "support/thread_cpu.rs"]
@@ -354,7 +357,13 @@ fn main() {
                 size.ops,
                 size.engine_ops,
                 size.engine_ops as f64 / size.ops as f64,
-                if size.used { "tape" } else { "engine" },
+                if size.native {
+                    "native"
+                } else if size.used {
+                    "tape"
+                } else {
+                    "engine"
+                },
             );
         }
     }

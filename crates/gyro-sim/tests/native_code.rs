@@ -8,9 +8,11 @@
 //! the engine (`engine_agreement`, which holds what runs to the engine).
 //!
 //! Covered: every shipped scene of Foucault's gyroscope and the Anschütz 1906, at `full` and
-//! `gyroscopic` (right-hand sides and Jacobians). The other designs' tapes are interpreted.
+//! `gyroscopic` (right-hand sides and Jacobians), and the accuracy study's and peer table's
+//! Foucault gyroscopes (`accuracy::foucault_release`). The other designs' tapes are interpreted.
 
 use gyro_model::Fidelity;
+use gyro_sim::accuracy::foucault_release;
 use gyro_sim::library::SCENES;
 use gyro_sim::{Scene, SceneOverrides, Simulation};
 
@@ -34,6 +36,12 @@ fn covered() -> Vec<(String, Simulation)> {
                 sims.push((format!("{name}/{fidelity}"), sim));
             }
         }
+    }
+    // The accuracy study's and the peer table's Foucault gyroscopes (ring axis vertical and
+    // horizontal): their own designs, not shipped files.
+    for elevation_deg in [90.0, 0.0] {
+        let (sim, _, _) = foucault_release(elevation_deg, 1.0).expect("compiles");
+        sims.push((format!("foucault_release({elevation_deg})"), sim));
     }
     sims
 }
