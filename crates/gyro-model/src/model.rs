@@ -400,10 +400,14 @@ pub struct TapeSize {
 }
 
 /// The text of `gyro-model/src/native/generated.rs` for these models: native code for every
-/// tape they record (right-hand sides and Jacobians), one function per distinct shape. The
-/// generator behind `tests/native_code.rs` in `gyro-sim`; see `crate::native`.
-pub fn native_source<M: ShipMotion>(models: &[&CompiledModel<M>]) -> String {
-    let tapes: Vec<&Tape> = models.iter().flat_map(|m| m.all_tapes()).collect();
+/// right-hand side they record, and their Jacobians where the flag says so, one function per
+/// distinct shape. The generator behind `tests/native_code.rs` in `gyro-sim`; see
+/// `crate::native`.
+pub fn native_source<M: ShipMotion>(models: &[(&CompiledModel<M>, bool)]) -> String {
+    let tapes: Vec<&Tape> = models
+        .iter()
+        .flat_map(|&(m, jacobian)| m.all_tapes(jacobian))
+        .collect();
     crate::native::source(&tapes)
 }
 
@@ -844,11 +848,11 @@ impl<M: ShipMotion> CompiledModel<M> {
         Self::run_jacobian(&j.blocks, &inputs[..n], x.len(), jac)
     }
 
-    /// Every tape recorded for this model: each fidelity's right-hand side and the running
-    /// fidelity's Jacobian (recorded now if not yet). What [`native_source`] writes out.
-    fn all_tapes(&self) -> Vec<&Tape> {
+    /// Every tape recorded for this model: each fidelity's right-hand side and, if asked, the
+    /// running fidelity's Jacobian (recorded now if not yet). What [`native_source`] writes out.
+    fn all_tapes(&self, jacobian: bool) -> Vec<&Tape> {
         let mut all: Vec<&Tape> = self.tapes.iter().map(|(_, t)| t).collect();
-        if let Some(j) = self.recorded_jacobian() {
+        if let Some(j) = self.recorded_jacobian().filter(|_| jacobian) {
             all.extend(&j.blocks);
         }
         all
