@@ -823,18 +823,14 @@ impl<M: ShipMotion> CompiledModel<M> {
     /// tests hold to the engine.
     pub fn rhs_tape(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Option<bool> {
         let tape = self.recorded_tape(self.running_recorded())?;
-        let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
-        let n = self.tape_inputs(t, x, &mut inputs);
-        Some(tape.eval(&inputs[..n], dx))
+        Some(self.with_tape_inputs(t, x, |inputs| tape.eval(inputs, dx)))
     }
 
     /// ẋ by the recorded tape's interpreter, even where native code runs it: what the tests
     /// hold the native code to (`None` if not recorded).
     pub fn rhs_tape_interpreted(&self, t: f64, x: &[f64], dx: &mut [f64]) -> Option<bool> {
         let tape = self.recorded_tape(self.running_recorded())?;
-        let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
-        let n = self.tape_inputs(t, x, &mut inputs);
-        Some(tape.interpret(&inputs[..n], dx))
+        Some(self.with_tape_inputs(t, x, |inputs| tape.interpret(inputs, dx)))
     }
 
     /// The Jacobian by the recorded tapes whether or not `jacobian` uses them; false if they
@@ -843,9 +839,9 @@ impl<M: ShipMotion> CompiledModel<M> {
         let Some(j) = self.recorded_jacobian() else {
             return false;
         };
-        let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
-        let n = self.tape_inputs(t, x, &mut inputs);
-        Self::run_jacobian(&j.blocks, &inputs[..n], x.len(), jac)
+        self.with_tape_inputs(t, x, |inputs| {
+            Self::run_jacobian(&j.blocks, inputs, x.len(), jac)
+        })
     }
 
     /// Every tape recorded for this model: each fidelity's right-hand side and, if asked, the
@@ -866,20 +862,17 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
     }
 
-    /// The tape's inputs at (t, x): x, then the base's scalars if it moves. Returns their count.
-    fn tape_inputs(
-        &self,
-        t: f64,
-        x: &[f64],
-        inputs: &mut [f64; MAX_STATES + BASE_INPUTS],
-    ) -> usize {
-        let dim = x.len();
-        inputs[..dim].copy_from_slice(x);
+    /// Calls `f` with the tapes' inputs at (t, x): x itself on a stationary base, x and then
+    /// the base's scalars on a moving one.
+    fn with_tape_inputs<R>(&self, t: f64, x: &[f64], f: impl FnOnce(&[f64]) -> R) -> R {
         if self.stationary.is_some() {
-            return dim;
+            return f(x);
         }
+        let dim = x.len();
+        let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
+        inputs[..dim].copy_from_slice(x);
         base_scalars(&self.base_at(t), &mut inputs[dim..dim + BASE_INPUTS]);
-        dim + BASE_INPUTS
+        f(&inputs[..dim + BASE_INPUTS])
     }
 
     /// ẋ by the generic engine (not the recorded tape): what the tape is held to.
@@ -902,12 +895,7 @@ impl<M: ShipMotion> CompiledModel<M> {
     /// ẋ of a fidelity: by its tape when recorded, by the generic engine otherwise.
     fn rhs_at(&self, fidelity: Fidelity, t: f64, x: &[f64], dx: &mut [f64]) -> bool {
         match self.tape(fidelity) {
-            Some(tape) if self.stationary.is_some() => tape.eval(x, dx),
-            Some(tape) => {
-                let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
-                let n = self.tape_inputs(t, x, &mut inputs);
-                tape.eval(&inputs[..n], dx)
-            }
+            Some(tape) => self.with_tape_inputs(t, x, |inputs| tape.eval(inputs, dx)),
             None => self.rhs_generic(fidelity, t, x, dx),
         }
     }
@@ -1124,13 +1112,9 @@ impl<M: ShipMotion> CompiledModel<M> {
         let Some(blocks) = self.jacobian_by_tape() else {
             return self.jacobian_at(self.fidelity, t, x, jac);
         };
-        let ok = if self.stationary.is_some() {
-            Self::run_jacobian(blocks, x, x.len(), jac)
-        } else {
-            let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
-            let n = self.tape_inputs(t, x, &mut inputs);
-            Self::run_jacobian(blocks, &inputs[..n], x.len(), jac)
-        };
+        let ok = self.with_tape_inputs(t, x, |inputs| {
+            Self::run_jacobian(blocks, inputs, x.len(), jac)
+        });
         if !ok {
             // Singular at this state: the engine's own elimination says what it can.
             self.jacobian_at(self.fidelity, t, x, jac);

@@ -274,6 +274,18 @@ fn main() {
     group.finish();
     c.final_summary();
 
+    print_ratios(&samples, &cases, (&xe, &se), (&xh, &sh));
+    print_calibration(&samples, &cases);
+}
+
+/// The table of engine / hand-written ratios against the targets, and the Villarceau
+/// run's work on both sides (end state and counters of engine and hand-written).
+fn print_ratios(
+    samples: &Totals,
+    cases: &[Case],
+    (xe, se): (&[f64], &SolverStats),
+    (xh, sh): (&[f64], &SolverStats),
+) {
     println!(
         "\nengine / hand-written, thread CPU time per call, mean over all of criterion's calls:"
     );
@@ -313,14 +325,17 @@ fn main() {
     row("villarceau-large/run", "µs", 1e3, TARGET_RUN);
     let gap = xe
         .iter()
-        .zip(&xh)
+        .zip(xh)
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f64::max);
     println!(
         "villarceau-large: {} vs {} RHS calls, {} vs {} steps (engine vs hand-written); end states differ by {gap:.1e}",
         se.rhs_evals, sh.rhs_evals, se.steps, sh.steps
     );
+}
 
+/// The tape against the generic engine, with the operation counts the model's rules read.
+fn print_calibration(samples: &Totals, cases: &[Case]) {
     // When a tape pays: its time against the engine's, beside the operation counts the model's
     // rule decides on (engine operations per tape operation).
     println!("\ntape / generic engine, thread CPU time per call, and the counts the rule reads:");
@@ -328,7 +343,7 @@ fn main() {
         "{:<44} {:>11} {:>11} {:>7} {:>8} {:>9} {:>7}  rule",
         "case", "tape", "generic", "ratio", "tape ops", "engine", "e/t"
     );
-    for case in &cases {
+    for case in cases {
         let m = &case.sim.model;
         let sizes = [
             ("rhs", m.tape_size(m.fidelity)),

@@ -15,7 +15,6 @@
 
 use gyro_model::{CompiledModel, Design, Effects, Fidelity, InitialCondition, Jet, ModelOptions};
 use gyro_model::{Moored, ShipMotion};
-use gyro_sim::library::SCENES;
 use gyro_sim::{Scene, SceneOverrides, Simulation};
 
 /// Deterministic pseudo-random numbers in [−1, 1].
@@ -172,30 +171,10 @@ fn compare<M: ShipMotion>(
 #[test]
 fn body_axes_engine_matches_the_reference_on_every_shipped_scene() {
     let mut rng = Lcg(7);
-    for (name, _) in SCENES {
-        for fidelity in [Fidelity::Full, Fidelity::Gyroscopic] {
-            let ov = SceneOverrides {
-                fidelity: Some(fidelity),
-                ..Default::default()
-            };
-            let scene = Scene::load(name, &ov).expect("shipped scene loads");
-            let sim = Simulation::new(&scene).expect("compiles");
-            if sim.model.fidelity != fidelity {
-                continue;
-            }
-            let (e_rhs, e_jac) = compare(
-                &format!("{name}/{fidelity}"),
-                &sim.model,
-                &mut rng,
-                0.2,
-                1e-3,
-            );
-            assert!(e_rhs < 1e-12, "{name}/{fidelity}: rhs differs by {e_rhs:e}");
-            assert!(
-                e_jac < 1e-10,
-                "{name}/{fidelity}: Jacobian differs by {e_jac:e}"
-            );
-        }
+    for (label, _, sim) in crate::support::shipped_models() {
+        let (e_rhs, e_jac) = compare(&label, &sim.model, &mut rng, 0.2, 1e-3);
+        assert!(e_rhs < 1e-12, "{label}: rhs differs by {e_rhs:e}");
+        assert!(e_jac < 1e-10, "{label}: Jacobian differs by {e_jac:e}");
     }
 }
 

@@ -12,10 +12,8 @@
 //! Jacobians for Foucault's gyroscope and the Anschütz 1906 (see `RHS_ONLY`). Other tapes, a
 //! user's own design's among them, are interpreted.
 
-use gyro_model::Fidelity;
+use gyro_sim::Simulation;
 use gyro_sim::accuracy::foucault_release;
-use gyro_sim::library::SCENES;
-use gyro_sim::{Scene, SceneOverrides, Simulation};
 
 /// Designs whose scenes get native right-hand sides and Jacobians.
 const WHOLE: &[&str] = &["foucault-gyroscope", "anschutz-1906"];
@@ -31,25 +29,11 @@ const RHS_ONLY: &[&str] = &[
 
 /// The covered models, each with whether its Jacobian is native too.
 fn covered() -> Vec<(String, Simulation, bool)> {
-    let mut sims = Vec::new();
-    for (name, _) in SCENES {
-        for fidelity in [Fidelity::Full, Fidelity::Gyroscopic] {
-            let ov = SceneOverrides {
-                fidelity: Some(fidelity),
-                ..Default::default()
-            };
-            let scene = Scene::load(name, &ov).expect("shipped scene loads");
-            let design = scene.design.name.as_str();
-            let jacobian = WHOLE.contains(&design);
-            if !jacobian && !RHS_ONLY.contains(&design) {
-                continue;
-            }
-            let sim = Simulation::new(&scene).expect("compiles");
-            if sim.model.fidelity == fidelity {
-                sims.push((format!("{name}/{fidelity}"), sim, jacobian));
-            }
-        }
-    }
+    let mut sims: Vec<_> = crate::support::shipped_models()
+        .into_iter()
+        .filter(|(_, design, _)| WHOLE.contains(&&**design) || RHS_ONLY.contains(&&**design))
+        .map(|(label, design, sim)| (label, sim, WHOLE.contains(&&*design)))
+        .collect();
     // The accuracy study's and the peer table's Foucault gyroscopes (ring axis vertical and
     // horizontal): their own designs, not shipped files.
     for elevation_deg in [90.0, 0.0] {

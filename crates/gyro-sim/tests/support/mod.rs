@@ -141,3 +141,24 @@ pub fn upward_crossings(t: &[f64], y: &[f64], yd: &[f64]) -> Vec<f64> {
 pub fn mean_period(c: &[f64]) -> f64 {
     (c[c.len() - 1] - c[0]) / (c.len() - 1) as f64
 }
+
+/// Every shipped scene compiled at each nonlinear fidelity it keeps (a scene whose effects
+/// force another fidelity is left out at that one): (label `scene/fidelity`, design name,
+/// simulation).
+pub fn shipped_models() -> Vec<(String, String, Simulation)> {
+    let mut models = Vec::new();
+    for (name, _) in gyro_sim::library::SCENES {
+        for fidelity in [Fidelity::Full, Fidelity::Gyroscopic] {
+            let ov = SceneOverrides {
+                fidelity: Some(fidelity),
+                ..Default::default()
+            };
+            let scene = Scene::load(name, &ov).expect("shipped scene loads");
+            let sim = Simulation::new(&scene).expect("compiles");
+            if sim.model.fidelity == fidelity {
+                models.push((format!("{name}/{fidelity}"), scene.design.name, sim));
+            }
+        }
+    }
+    models
+}
