@@ -3,7 +3,10 @@
 use super::StudyError;
 use super::StudyOptions;
 use super::measurement::{Budget, timed};
-use super::problems::{Anschutz4, LinearSystem, exact_linear, foucault_release};
+use super::problems::{
+    Anschutz4, HOURS, LinearSystem, anschutz_text, exact_linear, foucault_release, scene,
+};
+use crate::Simulation;
 use crate::run::ModelSystem;
 use crate::solvers::{self, Method, OdeSystem, OutputGrid, SolverStats, Tolerances};
 use gyro_model::theory::Villarceau;
@@ -38,7 +41,8 @@ impl OdeSystem for Eq44Bis {
 #[derive(Clone, Debug, Serialize)]
 pub struct PeerPoint {
     /// `gyrolab eq44bis` (hand-written), `gyrolab engine` (the Lagrangian engine's model),
-    /// `gyrolab 4state`.
+    /// `gyrolab 4state` (Beghin's 4-state Anschütz, hand-written), `gyrolab engine-linear` (the
+    /// engine's `linear` Anschütz 1906).
     pub implementation: String,
     pub method: String,
     pub rtol: f64,
@@ -54,9 +58,30 @@ pub struct PeerReport {
     /// Villarceau eq. 44 bis: g/a, δ, release γ₀ (rad, from the centre), exact period, periods.
     pub villarceau: serde_json::Value,
     pub anschutz4: Anschutz4,
+    /// The engine's `linear` Anschütz 1906 (harbour, 50°N, 2° off the meridian, 1 h): ẏ = A y
+    /// for the deviation y = x − x_e from equilibrium; SciPy solves the same matrix.
+    pub anschutz_linear: LinearPeer,
     /// atol = rtol × this, on both sides.
     pub atol_factor: f64,
     pub points: Vec<PeerPoint>,
+}
+
+/// The engine's linear Anschütz as the peer sees it.
+#[derive(Clone, Debug, Serialize)]
+pub struct LinearPeer {
+    pub n: usize,
+    /// Row-major n×n: the exact Jacobian of the full equations at the equilibrium.
+    pub a: Vec<f64>,
+    /// Deviation from equilibrium at the start.
+    pub y0: Vec<f64>,
+    /// State indices compared (the coordinates, not their rates).
+    pub compare: Vec<usize>,
+    /// Error scale (rad): the 2° release.
+    pub scale: f64,
+    pub t_end: f64,
+    pub dt: f64,
+    /// atol = rtol × this, on both sides.
+    pub atol_factor: f64,
 }
 
 /// Villarceau's peer case: the large-amplitude azimuth gyroscope, 100 exact periods.
@@ -84,6 +109,20 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
         t_end: a4.t_end,
     };
     let exact4 = exact_linear(&a4m, 4, &a4.x0, &grid4);
+    let lin_sc = scene(&anschutz_text("linear", HOURS, 2.0), None).map_err(setup)?;
+    let lin = Simulation::new(&lin_sc).map_err(|e| setup(e.to_string()))?;
+    let xe = lin.model.x_equilibrium.clone();
+    let lin_peer = LinearPeer {
+        n: lin.model.dim(),
+        a: lin.model.linear_matrix().to_vec(),
+        y0: lin.model.x0.iter().zip(&xe).map(|(x, e)| x - e).collect(),
+        compare: (0..lin.model.dim() / 2).collect(),
+        scale: 2f64.to_radians(),
+        t_end: lin.grid.t_end,
+        dt: lin.grid.dt,
+        atol_factor: 1e-4,
+    };
+    let exact_lin = exact_linear(&lin_peer.a, lin_peer.n, &lin_peer.y0, &lin.grid);
     let mut points = Vec::new();
     for &rtol in &opts.tolerances {
         let tol = Tolerances {
@@ -170,6 +209,48 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
                     wall_s: wall,
                     rhs_evals: stats.rhs_evals,
                 });
+                // The same through the engine: its `linear` model of the whole compass.
+                let toll = Tolerances {
+                    atol: rtol * lin_peer.atol_factor,
+                    ..tol
+                };
+                let ((res, stats), wall) = timed(opts, || {
+                    let mut x = lin.model.x0.clone();
+                    let mut k = 0;
+                    let mut worst: f64 = 0.0;
+                    let mut s =
+                        Budget::new(ModelSystem { model: &lin.model }, 3.0 * opts.max_point_s);
+                    let r = solvers::integrate(
+                        &mut s,
+                        method,
+                        &toll,
+                        &mut x,
+                        &lin.grid,
+                        &lin.breakpoints,
+                        |_, xs| {
+                            if let Some(e) = exact_lin.get(k) {
+                                for &i in &lin_peer.compare {
+                                    worst = worst.max((xs[i] - xe[i] - e[i]).abs());
+                                }
+                            }
+                            k += 1;
+                            ControlFlow::Continue(())
+                        },
+                    );
+                    match s.result(r) {
+                        Ok((_, st)) => (Some(worst / lin_peer.scale), st),
+                        Err(_) => (None, SolverStats::default()),
+                    }
+                });
+                points.push(PeerPoint {
+                    implementation: "gyrolab engine-linear".into(),
+                    method: method.to_string(),
+                    rtol,
+                    atol: toll.atol,
+                    error: res,
+                    wall_s: wall,
+                    rhs_evals: stats.rhs_evals,
+                });
             }
         }
     }
@@ -183,6 +264,7 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
             "engine_rhs_ns": sim.rhs_cost_ns(),
         }),
         anschutz4: a4,
+        anschutz_linear: lin_peer,
         atol_factor,
         points,
     })
