@@ -1313,3 +1313,73 @@ fn stiff_oscillatory_radau5_holds_longer_steps_than_rodas4_at_tight_tolerance() 
         );
     }
 }
+
+/// A system as seen by an integrator that is not told it is autonomous.
+struct NotToldAutonomous<S>(S);
+impl<S: OdeSystem> OdeSystem for NotToldAutonomous<S> {
+    fn dim(&self) -> usize {
+        self.0.dim()
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) {
+        self.0.rhs(t, x, dx)
+    }
+    fn jacobian(&mut self, t: f64, x: &[f64], jac: &mut [f64]) -> bool {
+        self.0.jacobian(t, x, jac)
+    }
+}
+
+/// RODAS4 takes ∂f/∂t = 0 for a system that says it is autonomous instead of differencing two
+/// evaluations. On every shipped scene of a stationary ship (at `full`, where RODAS4 is the
+/// scene's integrator) the trajectory is the same to the bit with and without the shortcut,
+/// and the shortcut saves exactly one rhs call per Jacobian.
+#[test]
+fn rodas4_skips_the_time_derivative_of_autonomous_models_without_changing_a_bit() {
+    use gyro_sim::run::ModelSystem;
+    fn samples<S: OdeSystem>(sys: &mut S, x0: &[f64]) -> (Vec<Vec<f64>>, SolverStats) {
+        let grid = OutputGrid {
+            t0: 0.0,
+            dt: 60.0,
+            t_end: 1800.0,
+        };
+        let tol = Tolerances {
+            rtol: 1e-8,
+            atol: 1e-10,
+            ..Default::default()
+        };
+        let mut x = x0.to_vec();
+        let mut out = Vec::new();
+        let r = integrate(sys, Method::Rodas4, &tol, &mut x, &grid, &[], |_, xs| {
+            out.push(xs.to_vec());
+            ControlFlow::Continue(())
+        });
+        (out, r.expect("integrates").1)
+    }
+    let mut checked = 0;
+    for (name, _, sim) in crate::support::shipped_models() {
+        if !name.ends_with("/full") || !sim.model.is_autonomous() {
+            continue;
+        }
+        assert!(ModelSystem { model: &sim.model }.is_autonomous(), "{name}");
+        let (told, s_told) = samples(&mut ModelSystem { model: &sim.model }, &sim.model.x0);
+        let (untold, s_untold) = samples(
+            &mut NotToldAutonomous(ModelSystem { model: &sim.model }),
+            &sim.model.x0,
+        );
+        assert_eq!(told.len(), untold.len(), "{name}");
+        for (a, b) in told.iter().zip(&untold) {
+            let same = a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits());
+            assert!(same, "{name}: {a:?} != {b:?}");
+        }
+        assert_eq!(s_told.steps, s_untold.steps, "{name}");
+        assert_eq!(
+            s_told.rhs_evals + s_told.jacobian_evals,
+            s_untold.rhs_evals,
+            "{name}: {s_told:?} / {s_untold:?}"
+        );
+        checked += 1;
+    }
+    println!(
+        "{checked} stationary scenes at full: same trajectories, one rhs call less per Jacobian"
+    );
+    assert!(checked >= 5, "only {checked} stationary scenes at full");
+}
