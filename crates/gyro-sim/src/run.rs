@@ -64,9 +64,6 @@ impl OdeSystem for ModelSystem<'_> {
         self.model.jacobian(t, x, jac);
         true
     }
-    fn is_autonomous(&self) -> bool {
-        self.model.is_autonomous()
-    }
 }
 
 /// The solver's work so far, as a run's observer sees it (see [`Simulation::run_with_progress`]).
@@ -164,9 +161,6 @@ impl OdeSystem for CountingSystem<'_> {
                 .set(self.counts.jacobian_evals.get() + 1);
         }
         provided
-    }
-    fn is_autonomous(&self) -> bool {
-        self.inner.is_autonomous()
     }
     fn step_counted(&mut self, accepted: bool) {
         let c = if accepted {

@@ -90,9 +90,6 @@ impl OdeSystem for Foucault44Bis {
     fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) {
         Foucault44Bis::rhs(self, x, dx)
     }
-    fn is_autonomous(&self) -> bool {
-        true
-    }
     fn jacobian(&mut self, _t: f64, x: &[f64], jac: &mut [f64]) -> bool {
         Foucault44Bis::jacobian(self, x, jac);
         true

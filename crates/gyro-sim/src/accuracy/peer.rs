@@ -25,9 +25,6 @@ impl OdeSystem for Eq44Bis {
         dx[0] = x[1];
         dx[1] = self.0.acceleration(x[0]);
     }
-    fn is_autonomous(&self) -> bool {
-        true
-    }
     fn jacobian(&mut self, _t: f64, x: &[f64], jac: &mut [f64]) -> bool {
         let (s, c) = x[0].sin_cos();
         jac.copy_from_slice(&[

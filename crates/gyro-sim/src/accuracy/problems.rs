@@ -83,9 +83,6 @@ impl OdeSystem for LinearSystem {
     fn dim(&self) -> usize {
         self.n
     }
-    fn is_autonomous(&self) -> bool {
-        true
-    }
     fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) {
         for (i, d) in dx.iter_mut().enumerate() {
             let row = &self.a[i * self.n..(i + 1) * self.n];

@@ -51,11 +51,6 @@ pub trait OdeSystem {
     /// Told of every step attempt as the integrator counts it (accepted or rejected), so an
     /// observer can report steps during a run; the final [`SolverStats`] hold the same totals.
     fn step_counted(&mut self, _accepted: bool) {}
-    /// True when f does not depend on t. RODAS4 then takes ∂f/∂t = 0 instead of spending an
-    /// rhs call a step on a forward difference that would come out exactly zero.
-    fn is_autonomous(&self) -> bool {
-        false
-    }
 }
 
 /// Integration method.

@@ -4,8 +4,8 @@
 //!
 //! Per step: f(t, x); the Jacobian df/dx — the system's exact one when it provides it, else
 //! central differences (2n rhs calls, increment cbrt(eps)·max(|x_j|, 1e-2)); df/dt by a
-//! forward difference in t (1 rhs call; none for a system that says it is autonomous, such as
-//! a compass on a stationary ship); one LU of (1/(γh)) I − J (partial pivoting,
+//! forward difference in t (1 rhs call, always: the trait cannot tell an autonomous system, and
+//! models driven by a ship program are not); one LU of (1/(γh)) I − J (partial pivoting,
 //! `linalg`); 5 further rhs calls. The Jacobian is reused when a step is retried at a smaller
 //! h. The embedded 3rd-order solution gives the error estimate; step control is Gustafsson's
 //! predictive controller as in RODAS. Dense output is RODAS's 3rd-order continuous extension.
@@ -143,12 +143,11 @@ impl Rodas4 {
                 stats,
             );
         }
-        // df/dt by a forward difference, kept inside the segment (zero, without the call, for an
-        // autonomous system: the difference of two equal evaluations).
+        // df/dt by a forward difference, kept inside the segment.
         let delta = (f64::EPSILON * t.abs().max(1e-5)).sqrt();
         let t_plus = w.at(t + delta);
         let delta = t_plus - te;
-        if delta > 0.0 && !sys.is_autonomous() {
+        if delta > 0.0 {
             sys.rhs(t_plus, x, &mut self.dy);
             stats.rhs_evals += 1;
             for i in 0..n {
