@@ -176,81 +176,36 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
                     atol: rtol * 1e-4,
                     ..tol
                 };
-                let ((res, stats), wall) = timed(opts, || {
-                    let mut x = a4.x0.to_vec();
-                    let mut k = 0;
-                    let mut worst: f64 = 0.0;
-                    let mut s = Budget::new(
-                        LinearSystem {
-                            a: a4m.clone(),
-                            n: 4,
-                        },
-                        3.0 * opts.max_point_s,
-                    );
-                    let r =
-                        solvers::integrate(&mut s, method, &tol4, &mut x, &grid4, &[], |_, xs| {
-                            if let Some(e) = exact4.get(k) {
-                                worst = worst.max((xs[0] - e[0]).abs()).max((xs[1] - e[1]).abs());
-                            }
-                            k += 1;
-                            ControlFlow::Continue(())
-                        });
-                    match s.result(r) {
-                        Ok((_, st)) => (Some(worst / 2f64.to_radians()), st),
-                        Err(_) => (None, SolverStats::default()),
-                    }
-                });
-                points.push(PeerPoint {
-                    implementation: "gyrolab 4state".into(),
-                    method: method.to_string(),
-                    rtol,
-                    atol: tol4.atol,
-                    error: res,
-                    wall_s: wall,
-                    rhs_evals: stats.rhs_evals,
-                });
+                let four = LinearRun {
+                    x0: &a4.x0,
+                    offset: &[0.0; 4],
+                    compare: &[0, 1],
+                    exact: &exact4,
+                    scale: 2f64.to_radians(),
+                    grid: &grid4,
+                    breakpoints: &[],
+                };
+                let system = || LinearSystem {
+                    a: a4m.clone(),
+                    n: 4,
+                };
+                points.push(four.point(opts, "gyrolab 4state", system, method, &tol4));
                 // The same through the engine: its `linear` model of the whole compass.
                 let toll = Tolerances {
                     atol: rtol * lin_peer.atol_factor,
                     ..tol
                 };
-                let ((res, stats), wall) = timed(opts, || {
-                    let mut x = lin.model.x0.clone();
-                    let mut k = 0;
-                    let mut worst: f64 = 0.0;
-                    let mut s =
-                        Budget::new(ModelSystem { model: &lin.model }, 3.0 * opts.max_point_s);
-                    let r = solvers::integrate(
-                        &mut s,
-                        method,
-                        &toll,
-                        &mut x,
-                        &lin.grid,
-                        &lin.breakpoints,
-                        |_, xs| {
-                            if let Some(e) = exact_lin.get(k) {
-                                for &i in &lin_peer.compare {
-                                    worst = worst.max((xs[i] - xe[i] - e[i]).abs());
-                                }
-                            }
-                            k += 1;
-                            ControlFlow::Continue(())
-                        },
-                    );
-                    match s.result(r) {
-                        Ok((_, st)) => (Some(worst / lin_peer.scale), st),
-                        Err(_) => (None, SolverStats::default()),
-                    }
-                });
-                points.push(PeerPoint {
-                    implementation: "gyrolab engine-linear".into(),
-                    method: method.to_string(),
-                    rtol,
-                    atol: toll.atol,
-                    error: res,
-                    wall_s: wall,
-                    rhs_evals: stats.rhs_evals,
-                });
+                let engine = LinearRun {
+                    x0: &lin.model.x0,
+                    offset: &xe,
+                    compare: &lin_peer.compare,
+                    exact: &exact_lin,
+                    scale: lin_peer.scale,
+                    grid: &lin.grid,
+                    breakpoints: &lin.breakpoints,
+                };
+                let system = || ModelSystem { model: &lin.model };
+                points.push(engine.point(opts, "gyrolab engine-linear", system, method, &toll));
             }
         }
     }
@@ -268,6 +223,69 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
         atol_factor,
         points,
     })
+}
+
+/// A linear case with its exact solution at the grid times.
+struct LinearRun<'a> {
+    x0: &'a [f64],
+    /// Subtracted from the state before comparing (the equilibrium, for the engine's model).
+    offset: &'a [f64],
+    /// State indices compared.
+    compare: &'a [usize],
+    exact: &'a [Vec<f64>],
+    scale: f64,
+    grid: &'a OutputGrid,
+    breakpoints: &'a [f64],
+}
+
+impl LinearRun<'_> {
+    /// One run (best wall time of a few) within a budget, its error the largest
+    /// |x_i − offset_i − exact_i| over the samples and the compared states, over `scale`.
+    fn point<S: OdeSystem>(
+        &self,
+        opts: &StudyOptions,
+        implementation: &str,
+        system: impl Fn() -> S,
+        method: Method,
+        tol: &Tolerances,
+    ) -> PeerPoint {
+        let ((res, stats), wall) = timed(opts, || {
+            let mut x = self.x0.to_vec();
+            let mut k = 0;
+            let mut worst: f64 = 0.0;
+            let mut s = Budget::new(system(), 3.0 * opts.max_point_s);
+            let r = solvers::integrate(
+                &mut s,
+                method,
+                tol,
+                &mut x,
+                self.grid,
+                self.breakpoints,
+                |_, xs| {
+                    if let Some(e) = self.exact.get(k) {
+                        for &i in self.compare {
+                            worst = worst.max((xs[i] - self.offset[i] - e[i]).abs());
+                        }
+                    }
+                    k += 1;
+                    ControlFlow::Continue(())
+                },
+            );
+            match s.result(r) {
+                Ok((_, st)) => (Some(worst / self.scale), st),
+                Err(_) => (None, SolverStats::default()),
+            }
+        });
+        PeerPoint {
+            implementation: implementation.into(),
+            method: method.to_string(),
+            rtol: tol.rtol,
+            atol: tol.atol,
+            error: res,
+            wall_s: wall,
+            rhs_evals: stats.rhs_evals,
+        }
+    }
 }
 
 /// One run of `system` from `x0` to the end of `grid` (best wall time of a few), its error
