@@ -7,7 +7,7 @@
 //! and the refusal of a design outside the stable region.
 
 use crate::support::*;
-use gyro_model::theory::{TwinGyro, polynomial_roots};
+use gyro_model::theory::{TwinGyro, polynomial_roots, rolling_error_magnitude_rad};
 use gyro_model::{CompiledModel, Design, Fidelity, Moored};
 use gyro_sim::SceneOverrides;
 use gyro_sim::solvers::Method;
@@ -508,5 +508,133 @@ fn below_line_delta_the_undamped_compass_diverges_without_oscillating() {
                 "real: {slow:?}"
             );
         }
+    }
+}
+
+/// The mean reading of a 5-h rolling run at 50°N (10-s roll, 0.70 m at the compass) on heading
+/// 045°, minus the harbour reading there: the twin-gyro's rolling error at `fidelity`, with the
+/// design's parameters overridden; and the theory of that design at 50°N. DOP853 at both
+/// fidelities: at `full` it takes 105 s here, RODAS4 365 s.
+fn rolling_error(overrides: &[(&str, f64)], fidelity: &str) -> (f64, TwinGyro) {
+    let ov: Vec<String> = overrides
+        .iter()
+        .map(|(k, v)| format!("\"parameters.{k}\" = {v:e}"))
+        .collect();
+    // atol in rad and rad/s, as the shipped rolling scenes.
+    let (rtol, atol) = (1e-7, 1e-6);
+    let text = |sea: bool| {
+        format!(
+            r#"name = "t"
+duration_s = 18000.0
+output_rate_hz = 2.0
+[start]
+latitude_deg = 50.0
+heading_deg = 45.0
+[compass]
+design = "sperry-twin-1918"
+design_overrides = {{ {} }}
+pivot_m = [0.0, 0.0, 10.035]
+{}
+[simulation]
+fidelity = "{fidelity}"
+integrator = "dop853"
+rtol = {rtol:e}
+atol = {atol:e}
+"#,
+            ov.join(", "),
+            if sea {
+                "[sea]\nroll_amplitude_deg = 4.0\nroll_period_s = 10.0"
+            } else {
+                ""
+            }
+        )
+    };
+    let harbour = scene_from(&text(false), &SceneOverrides::default());
+    let still = gyro_sim::Simulation::new(&harbour).expect("compiles");
+    let at_rest = still
+        .model
+        .readout(0.0, &still.model.equilibrium_state())
+        .reading_error_rad;
+    let th = TwinGyro::from_design(&harbour.design, 50f64.to_radians()).expect("twin");
+    let sc = scene_from(&text(true), &SceneOverrides::default());
+    let (sim, out, _) = run(&sc, Method::Dop853, tol(rtol, atol));
+    // The mean, fitted with the two free modes the start excites (their exponents from the
+    // quartic, within 1 % of the simulated ones: `simulated_periods_and_damping_are_the_quartics`)
+    // by least squares from 30 min on: a plain mean keeps ≈ 10 % of a free swing that decays
+    // over hours.
+    let r = th.roots();
+    let basis = |t: f64| -> [f64; 5] {
+        let (a, b) = ((r[0].0 * t).exp(), (r[2].0 * t).exp());
+        [
+            1.0,
+            a * (r[0].1 * t).cos(),
+            a * (r[0].1 * t).sin(),
+            b * (r[2].1 * t).cos(),
+            b * (r[2].1 * t).sin(),
+        ]
+    };
+    let (mut a, mut b) = (vec![0.0; 25], vec![0.0; 5]);
+    for (t, x) in out.iter().filter(|(t, _)| *t >= 1800.0) {
+        let f = basis(*t);
+        let e = sim.model.readout(*t, x).reading_error_rad;
+        for i in 0..5 {
+            b[i] += f[i] * e;
+            for j in 0..5 {
+                a[i * 5 + j] += f[i] * f[j];
+            }
+        }
+    }
+    (solve(a, b, 5)[0] - at_rest, th)
+}
+
+/// Beghin §59 (61): after the compensation (54) the twin-gyro's mean rolling error is that of its
+/// two gyros in the same sense on one frame (2IΩ, 3ap) times
+/// (2/3)[2ap(y − x − τ) + 3kc²(y − τ)]/[2ap(y + 2x − τ) + 3kc²(y − τ)], → 2/3 as M ≫ x, τ.
+/// At `full` fidelity, on the design as shipped (factor 0.140) and with the wire 100 τ₀ stiff
+/// (factor 0.610): the error grows between the two as the factor does, within 10 %; each is
+/// 0.78–0.82 of the factor times the single frame's closed form ½ sinΔ cosΔ (J₀/g)² 3ap/(2τ)
+/// (measured 1.157° and 4.817° against 10.111°), asserted within 25 %: the 20 % is not found
+/// yet (the same closed form gives the Anschütz 1906 within 7 %). `gyroscopic` fidelity, which
+/// takes the boxes as tilting with the spider when it solves for the spider's motion, gives 0.77°
+/// where `full` gives 1.16° on the shipped design: the comparison's rolling scenes run it, and
+/// the comparison's verdict on (61) reads that.
+#[test]
+fn rolling_error_follows_factor_61() {
+    let j0_g = {
+        let w = TAU / 10.0;
+        10.035 * 4f64.to_radians().sin() * w * w / gyro_model::constants::STANDARD_GRAVITY_M_PER_S2
+    };
+    let tau0 = {
+        let d = design(0.0, &[]).expect("valid");
+        d.parameter("tau_equator_n_m").expect("τ₀")
+    };
+    let measure = |ov: &[(&str, f64)]| {
+        let (err, th) = rolling_error(ov, "full");
+        let single = rolling_error_magnitude_rad(
+            j0_g * gyro_model::constants::STANDARD_GRAVITY_M_PER_S2,
+            45f64.to_radians(),
+            th.pendulous_moment + th.east_pendulous_moment,
+            2.0 * th.tau(),
+        );
+        let ratio = err.abs() / single;
+        println!(
+            "{ov:?}: error {:.4}°, single frame {:.3}°, ratio {ratio:.4}, factor (61) {:.4}",
+            err.to_degrees(),
+            single.to_degrees(),
+            th.rolling_factor()
+        );
+        (ratio, th.rolling_factor())
+    };
+    let (shipped, f_shipped) = measure(&[]);
+    let (stiff, f_stiff) = measure(&[("wire_stiffness_n_m_per_rad", 100.0 * tau0)]);
+    assert!(f_stiff > 0.6 && f_stiff < 2.0 / 3.0, "M ≫ x, τ: {f_stiff}");
+    assert!(
+        ((stiff / shipped) / (f_stiff / f_shipped) - 1.0).abs() < 0.10,
+        "growth {} vs (61)'s {}",
+        stiff / shipped,
+        f_stiff / f_shipped
+    );
+    for (r, f) in [(shipped, f_shipped), (stiff, f_stiff)] {
+        assert!((r / f - 1.0).abs() < 0.25, "ratio {r} vs factor {f}");
     }
 }
