@@ -461,44 +461,23 @@ fn the_energy_balance_is_recorded_when_asked() {
 /// compass) on `heading_deg`, minus the harbour reading there: the rolling error V₀.
 /// `overrides` are design parameters.
 fn rolling_error(overrides: &[(&str, f64)], heading_deg: f64) -> f64 {
-    let ov: Vec<String> = overrides
-        .iter()
-        .map(|(k, v)| format!("\"parameters.{k}\" = {v:?}"))
-        .collect();
-    let text = |sea: bool| {
-        format!(
-            r#"name = "t"
-duration_s = 14400.0
-output_rate_hz = 2.0
-[start]
-latitude_deg = 50.0
-heading_deg = {heading_deg}
-[compass]
-design = "sperry-1911"
-design_overrides = {{ {} }}
-pivot_m = [0.0, 0.0, 10.035]
-{}
-[simulation]
-fidelity = "gyroscopic"
-integrator = "dop853"
-rtol = 1e-7
-"#,
-            ov.join(", "),
-            if sea {
-                "[sea]\nroll_amplitude_deg = 4.0\nroll_period_s = 10.0"
-            } else {
-                ""
-            }
+    let scene = |sea| {
+        rolling_scene(
+            "sperry-1911",
+            overrides,
+            heading_deg,
+            14400.0,
+            "gyroscopic",
+            sea,
         )
     };
-    let harbour = scene_from(&text(false), &SceneOverrides::default());
+    let harbour = scene(false);
     let still = Simulation::new(&harbour).expect("compiles");
     let at_rest = still
         .model
         .readout(0.0, &still.model.equilibrium_state())
         .reading_error_rad;
-    let sc = scene_from(&text(true), &SceneOverrides::default());
-    let (sim, out, _) = run(&sc, Method::Dop853, tol(1e-7, 1e-10));
+    let (sim, out, _) = run(&scene(true), Method::Dop853, tol(1e-7, 1e-10));
     let last: Vec<f64> = out
         .iter()
         .filter(|(t, _)| *t >= 7200.0)

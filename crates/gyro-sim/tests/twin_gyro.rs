@@ -516,48 +516,16 @@ fn below_line_delta_the_undamped_compass_diverges_without_oscillating() {
 /// design's parameters overridden; and the theory of that design at 50°N. DOP853 at both
 /// fidelities: at `full` it takes 105 s here, RODAS4 365 s.
 fn rolling_error(overrides: &[(&str, f64)], fidelity: &str) -> (f64, TwinGyro) {
-    let ov: Vec<String> = overrides
-        .iter()
-        .map(|(k, v)| format!("\"parameters.{k}\" = {v:e}"))
-        .collect();
-    // atol in rad and rad/s, as the shipped rolling scenes.
-    let (rtol, atol) = (1e-7, 1e-6);
-    let text = |sea: bool| {
-        format!(
-            r#"name = "t"
-duration_s = 18000.0
-output_rate_hz = 2.0
-[start]
-latitude_deg = 50.0
-heading_deg = 45.0
-[compass]
-design = "sperry-twin-1918"
-design_overrides = {{ {} }}
-pivot_m = [0.0, 0.0, 10.035]
-{}
-[simulation]
-fidelity = "{fidelity}"
-integrator = "dop853"
-rtol = {rtol:e}
-atol = {atol:e}
-"#,
-            ov.join(", "),
-            if sea {
-                "[sea]\nroll_amplitude_deg = 4.0\nroll_period_s = 10.0"
-            } else {
-                ""
-            }
-        )
-    };
-    let harbour = scene_from(&text(false), &SceneOverrides::default());
+    let scene = |sea| rolling_scene("sperry-twin-1918", overrides, 45.0, 18000.0, fidelity, sea);
+    let harbour = scene(false);
     let still = gyro_sim::Simulation::new(&harbour).expect("compiles");
     let at_rest = still
         .model
         .readout(0.0, &still.model.equilibrium_state())
         .reading_error_rad;
     let th = TwinGyro::from_design(&harbour.design, 50f64.to_radians()).expect("twin");
-    let sc = scene_from(&text(true), &SceneOverrides::default());
-    let (sim, out, _) = run(&sc, Method::Dop853, tol(rtol, atol));
+    // atol in rad and rad/s, as the shipped rolling scenes.
+    let (sim, out, _) = run(&scene(true), Method::Dop853, tol(1e-7, 1e-6));
     // The mean, fitted with the two free modes the start excites (their exponents from the
     // quartic, within 1 % of the simulated ones: `simulated_periods_and_damping_are_the_quartics`)
     // by least squares from 30 min on: a plain mean keeps ≈ 10 % of a free swing that decays
@@ -600,10 +568,8 @@ atol = {atol:e}
 /// the comparison's verdict on (61) reads that.
 #[test]
 fn rolling_error_follows_factor_61() {
-    let j0_g = {
-        let w = TAU / 10.0;
-        10.035 * 4f64.to_radians().sin() * w * w / gyro_model::constants::STANDARD_GRAVITY_M_PER_S2
-    };
+    // J₀ of the standard sea: 0.70 m at the compass over a 10-s roll.
+    let j0 = 10.035 * 4f64.to_radians().sin() * (TAU / 10.0) * (TAU / 10.0);
     let tau0 = {
         let d = design(0.0, &[]).expect("valid");
         d.parameter("tau_equator_n_m").expect("τ₀")
@@ -611,7 +577,7 @@ fn rolling_error_follows_factor_61() {
     let measure = |ov: &[(&str, f64)]| {
         let (err, th) = rolling_error(ov, "full");
         let single = rolling_error_magnitude_rad(
-            j0_g * gyro_model::constants::STANDARD_GRAVITY_M_PER_S2,
+            j0,
             45f64.to_radians(),
             th.pendulous_moment + th.east_pendulous_moment,
             2.0 * th.tau(),

@@ -98,6 +98,49 @@ atol = 1e-12
     )
 }
 
+/// `design` (its parameters overridden) moored at 50°N on `heading_deg`, `duration_s` long,
+/// sampled at 2 Hz, 10.035 m above the roll axis, DOP853 at rtol 1e-7 and `fidelity`: with the
+/// standard sea (10-s roll of 4°, 0.70 m at the compass) or calm (the scenes the rolling tests
+/// difference).
+pub fn rolling_scene(
+    design: &str,
+    overrides: &[(&str, f64)],
+    heading_deg: f64,
+    duration_s: f64,
+    fidelity: &str,
+    sea: bool,
+) -> Scene {
+    let ov: Vec<String> = overrides
+        .iter()
+        .map(|(k, v)| format!("\"parameters.{k}\" = {v:e}"))
+        .collect();
+    let text = format!(
+        r#"name = "t"
+duration_s = {duration_s:e}
+output_rate_hz = 2.0
+[start]
+latitude_deg = 50.0
+heading_deg = {heading_deg:e}
+[compass]
+design = "{design}"
+design_overrides = {{ {} }}
+pivot_m = [0.0, 0.0, 10.035]
+{}
+[simulation]
+fidelity = "{fidelity}"
+integrator = "dop853"
+rtol = 1e-7
+"#,
+        ov.join(", "),
+        if sea {
+            "[sea]\nroll_amplitude_deg = 4.0\nroll_period_s = 10.0"
+        } else {
+            ""
+        }
+    );
+    scene_from(&text, &SceneOverrides::default())
+}
+
 /// The index of a coordinate by name in the readout's `q`.
 pub fn coordinate(sim: &Simulation, name: &str) -> usize {
     sim.model.design.coordinate_index(name).expect(name)
