@@ -68,6 +68,16 @@ pub fn solve_nested<T: Real, const N: usize>(
     if let Some(solved) = T::record_solve(a, b, n, false) {
         return solved;
     }
+    eliminate_nested(a, b, n)
+}
+
+/// The elimination of [`solve_nested`] without the recording hook: what a recording runs on a
+/// constant matrix, whose factor then folds to constants (`tape::Tr::record_solve`).
+pub(crate) fn eliminate_nested<T: Real, const N: usize>(
+    a: &mut [[T; N]; N],
+    b: &mut [T; N],
+    n: usize,
+) -> bool {
     let scale = a[..n]
         .iter()
         .flat_map(|row| row[..n].iter())
@@ -130,6 +140,16 @@ pub fn solve_spd_nested<T: Real, const N: usize>(
     if let Some(solved) = T::record_solve(a_in, b, n, true) {
         return solved;
     }
+    ldlt_nested(a_in, b, n)
+}
+
+/// The LDLᵀ solve of [`solve_spd_nested`] without the recording hook (see
+/// [`eliminate_nested`]).
+pub(crate) fn ldlt_nested<T: Real, const N: usize>(
+    a_in: &[[T; N]; N],
+    b: &mut [T; N],
+    n: usize,
+) -> bool {
     let scale = (0..n).map(|i| a_in[i][i].re().abs()).fold(0.0, f64::max);
     if !(scale > 0.0) || !scale.is_finite() {
         return false;

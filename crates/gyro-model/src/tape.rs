@@ -320,6 +320,9 @@ impl Real for Tr {
         n: usize,
         spd_first: bool,
     ) -> Option<bool> {
+        if let Some(solved) = Self::solve_constant(a, b, n, spd_first) {
+            return Some(solved);
+        }
         // The values at the recording state, by the same solves the tape will run.
         let mut av = [[0.0; N]; N];
         let mut bv = [0.0; N];
@@ -345,6 +348,39 @@ impl Real for Tr {
             }
         });
         Some(true)
+    }
+}
+
+impl Tr {
+    /// A solve whose matrix is constant (a one-coordinate chain's mass matrix: Foucault's
+    /// gyroscopes) is factored while recording: the engine's own elimination runs on the
+    /// recording scalars, its factor folds to constants and only the substitution on b is
+    /// recorded: the same operations in the same order as the engine's, so the tape keeps its
+    /// results to the bit and drops the factor's divisions and checks from every evaluation.
+    /// `None` if the matrix is not constant, or singular (then recorded as a solve, which
+    /// reports it at every evaluation as before).
+    fn solve_constant<const N: usize>(
+        a: &[[Self; N]; N],
+        b: &mut [Self; N],
+        n: usize,
+        spd_first: bool,
+    ) -> Option<bool> {
+        let constant =
+            with_recorder(|r| (0..n * n).all(|k| r.is_const(a[k / n][k % n].id).is_some()));
+        if !constant {
+            return None;
+        }
+        let raw = with_recorder(|r| r.raw);
+        let mut x = *b;
+        // LDLᵀ leaves b untouched when it fails, as the engine's fallback expects.
+        let solved = (spd_first && linalg::ldlt_nested(a, &mut x, n))
+            || linalg::eliminate_nested(&mut { *a }, &mut x, n);
+        // Count the engine's work as for a recorded solve: the tape is weighed against it.
+        with_recorder(|r| r.raw = raw + 2 * (n * n * n / 3 + n * n));
+        solved.then(|| {
+            *b = x;
+            true
+        })
     }
 }
 
