@@ -777,10 +777,23 @@ impl Comparison {
 
     /// The Markdown report; `plots` are the figures' paths relative to the report.
     pub fn render(&self, command: &str, plots: &[(String, String)]) -> String {
+        let mut s = self.render_intro(command);
+        s.push_str(&self.render_verdict());
+        s.push_str(&self.render_tables(plots));
+        if let Some((_, file)) = plots.iter().find(|(k, _)| k == "scorecard") {
+            s.insert_str(
+                s.find("\n## Fitted metrics").unwrap_or(s.len()),
+                &format!("\n![Who errs least where: the key error of each scene, design against design]({file})\n"),
+            );
+        }
+        s.push_str(LIMITS);
+        s.push_str(&self.render_cost());
+        s
+    }
+
+    /// Title, the command that regenerates the report, the designs and the scenes.
+    fn render_intro(&self, command: &str) -> String {
         let mut s = String::new();
-        let f = |v: Option<f64>, scale: f64, digits: usize| {
-            v.map_or("—".to_string(), |x| format!("{:.*}", digits, x * scale))
-        };
         s.push_str("# The compasses compared\n\n");
         s.push_str(
             "Beghin's thesis (1922) is a comparison: which compass errs least, where, and why. This report runs every \
@@ -822,7 +835,12 @@ the list.{}\n\n",
             ));
         }
 
-        // Verdict.
+        s
+    }
+
+    /// The text's comparative claims, each with its verdict, then who errs least where.
+    fn render_verdict(&self) -> String {
+        let mut s = String::new();
         s.push_str("\n## Verdict: the text's comparative claims\n\n");
         let count = |v: Verdict| self.claims.iter().filter(|c| c.verdict == v).count();
         s.push_str(&format!(
@@ -844,7 +862,15 @@ the list.{}\n\n",
         }
         s.push_str(&self.summary());
 
-        // Tables.
+        s
+    }
+
+    /// One table of fitted metrics per scene, each with its figure when there is one.
+    fn render_tables(&self, plots: &[(String, String)]) -> String {
+        let mut s = String::new();
+        let f = |v: Option<f64>, scale: f64, digits: usize| {
+            v.map_or("—".to_string(), |x| format!("{:.*}", digits, x * scale))
+        };
         s.push_str("\n## Fitted metrics, design × scene\n\n");
         s.push_str(
             "Angles in degrees, periods in minutes. *period*, *decrement*: the damped sinusoid fitted from the start to the first \
@@ -896,16 +922,12 @@ dial: the Sperry's and the Slough's latitude error is not a rolling error); *run
                 s.push('\n');
             }
         }
-        if let Some((_, file)) = plots.iter().find(|(k, _)| k == "scorecard") {
-            s.insert_str(
-                s.find("\n## Fitted metrics").unwrap_or(s.len()),
-                &format!("\n![Who errs least where: the key error of each scene, design against design]({file})\n"),
-            );
-        }
+        s
+    }
 
-        s.push_str(LIMITS);
-
-        // Cost.
+    /// What the sweep cost: its wall time, the slowest scene and the slowest run.
+    fn render_cost(&self) -> String {
+        let mut s = String::new();
         s.push_str("## What the comparison costs\n\n");
         if let Some(Slowest {
             run_scene: rs,

@@ -52,6 +52,28 @@ pub struct PeerPoint {
     pub rhs_evals: u64,
 }
 
+impl PeerPoint {
+    /// The point of one timed run: its error (`None` if it failed) and its solver counts.
+    fn new(
+        implementation: &str,
+        method: Method,
+        tol: &Tolerances,
+        error: Option<f64>,
+        wall_s: f64,
+        stats: &SolverStats,
+    ) -> Self {
+        PeerPoint {
+            implementation: implementation.into(),
+            method: method.to_string(),
+            rtol: tol.rtol,
+            atol: tol.atol,
+            error,
+            wall_s,
+            rhs_evals: stats.rhs_evals,
+        }
+    }
+}
+
 /// The peer cases and gyrolab's side of them.
 #[derive(Clone, Debug, Serialize)]
 pub struct PeerReport {
@@ -276,15 +298,7 @@ impl LinearRun<'_> {
                 Err(_) => (None, SolverStats::default()),
             }
         });
-        PeerPoint {
-            implementation: implementation.into(),
-            method: method.to_string(),
-            rtol: tol.rtol,
-            atol: tol.atol,
-            error: res,
-            wall_s: wall,
-            rhs_evals: stats.rhs_evals,
-        }
+        PeerPoint::new(implementation, method, tol, res, wall, &stats)
     }
 }
 
@@ -313,13 +327,5 @@ fn end_state_point<S: OdeSystem>(
             Err(_) => (None, SolverStats::default()),
         }
     });
-    PeerPoint {
-        implementation: implementation.into(),
-        method: method.to_string(),
-        rtol: tol.rtol,
-        atol: tol.atol,
-        error: res,
-        wall_s: wall,
-        rhs_evals: stats.rhs_evals,
-    }
+    PeerPoint::new(implementation, method, tol, res, wall, &stats)
 }
