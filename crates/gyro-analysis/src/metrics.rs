@@ -97,6 +97,10 @@ pub struct RunMetrics {
     pub steady_error_sigma_rad: Option<f64>,
     pub steady_drift_rad_per_s: Option<f64>,
     pub steady_drift_sigma_rad_per_s: Option<f64>,
+    /// The reading error at the first sample: where the run starts. A scene without an azimuth
+    /// offset starts at the calm equilibrium of its latitude, dial and heading, so a rolling
+    /// error net of it is what the sea adds, with no settling left in it.
+    pub start_error_rad: Option<f64>,
     pub ballistic_events: u64,
     /// The largest |peak deviation| over the manoeuvres (signed).
     pub ballistic_peak_rad: Option<f64>,
@@ -180,6 +184,7 @@ impl RunMetrics {
                 "steady_drift_sigma_rad_per_s",
                 F64(self.steady_drift_sigma_rad_per_s),
             ),
+            ("start_error_rad", F64(self.start_error_rad)),
             ("ballistic_events", U64(Some(self.ballistic_events))),
             ("ballistic_peak_rad", F64(self.ballistic_peak_rad)),
             (
@@ -447,6 +452,7 @@ pub(crate) fn set_cell(r: &mut RunMetrics, name: &str, cell: Cell) {
         "steady_error_sigma_rad" => r.steady_error_sigma_rad = f(),
         "steady_drift_rad_per_s" => r.steady_drift_rad_per_s = f(),
         "steady_drift_sigma_rad_per_s" => r.steady_drift_sigma_rad_per_s = f(),
+        "start_error_rad" => r.start_error_rad = f(),
         "ballistic_events" => r.ballistic_events = u().unwrap_or(0),
         "ballistic_peak_rad" => r.ballistic_peak_rad = f(),
         "ballistic_expected_peak_rad" => r.ballistic_expected_peak_rad = f(),
@@ -676,7 +682,7 @@ pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> 
     }
 
     let (pt, px) = decimate(t, err, 2000);
-    let metrics = summarise(
+    let mut metrics = summarise(
         run,
         t,
         &azimuth,
@@ -685,6 +691,7 @@ pub fn analyze_loaded(run: &Run, opts: &AnalysisOptions) -> Result<RunAnalysis> 
         &ballistic,
         rolling.as_ref(),
     );
+    metrics.start_error_rad = err.first().copied().filter(|e| e.is_finite());
     Ok(RunAnalysis {
         metrics,
         azimuth,
@@ -764,6 +771,7 @@ fn summarise(
         steady_error_sigma_rad: sd(steady.value),
         steady_drift_rad_per_s: v(steady.drift_per_s),
         steady_drift_sigma_rad_per_s: sd(steady.drift_per_s),
+        start_error_rad: None,
         ballistic_events: ballistic.len() as u64,
         ballistic_peak_rad: worst.and_then(|b| b.peak_deviation_rad),
         ballistic_expected_peak_rad: worst.and_then(|b| b.expected_peak_deviation_rad),

@@ -759,6 +759,29 @@ impl ThreeGyro {
                 * (self.righting_moment - self.free_surface_f))
                 .sqrt()
     }
+    /// The mean azimuth error under a horizontal acceleration J₀ sin σt athwartships on heading
+    /// Δ (a rolling sea), from the second-order terms of (51) the text names (§70, L3131),
+    /// re-derived: τ(1 + √3)ζ = Πf⟨J_x λ⟩/g + ϖ(E − F)⟨J_x J_y⟩/g², with ⟨J_x J_y⟩ = ½J₀² sinΔ cosΔ.
+    /// The heel λ is the lateral group's forced response (eqs. 10, 54 without the oil), far
+    /// above its 1-min frequency: λ/(J_y/g) = (Πf − ϖF)/(σ²I²Ω²/(P + τ√3 − 2cσ²) + 𝒜σ² − (Πf − ϖF)),
+    /// ≈ (T_swell/T₁)², "une oscillation forcée d'amplitude très faible". The oil's v₁, v₂ lag
+    /// the swell by a quarter period (their time constants are minutes) and are left out.
+    /// Returns (the heel's term, the free surfaces' term), rad, signed as they add.
+    pub fn rolling_error_terms_rad(&self, j0: f64, sigma: f64, heading_rad: f64) -> (f64, f64) {
+        let g = STANDARD_GRAVITY_M_PER_S2;
+        let (h, s2) = (self.spin_momentum, sigma * sigma);
+        let pf_lateral = self.righting_moment - self.free_surface_f;
+        let p_lateral = self.linkage_rate + self.tau() * 3f64.sqrt();
+        let gain = pf_lateral
+            / (s2 * h * h / (p_lateral - 2.0 * self.box_inertia * s2) + self.inertia_a * s2
+                - pf_lateral);
+        let jj = 0.5 * j0 * j0 * heading_rad.sin() * heading_rad.cos() / (g * g);
+        let directive = self.tau() * (1.0 + 3f64.sqrt());
+        (
+            self.righting_moment * gain * jj / directive,
+            (self.free_surface_e - self.free_surface_f) * jj / directive,
+        )
+    }
     /// The five root families of the precise undamped model (10)–(12), as angular frequencies
     /// |r| (1/s): the South springs' mode r₁ ≈ √(p(1 + √3)²/(𝒞 + 2c)), the azimuth r₂ =
     /// √(τΠf/(I²Ω²(1 + √3))), the nutation r₃ = IΩ√((𝒞 + 2c)/((𝒞 − c)ℬc)), the lateral r₄ =

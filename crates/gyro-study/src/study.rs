@@ -296,6 +296,7 @@ pub const METRICS: &[&str] = &[
     "steady_error_sigma_rad",
     "steady_drift_rad_per_s",
     "steady_drift_sigma_rad_per_s",
+    "start_error_rad",
     "ballistic_events",
     "ballistic_peak_rad",
     "ballistic_expected_peak_rad",

@@ -50,6 +50,7 @@ fn constants() -> Constants {
         sperry_re_h: Some(0.2),
         sperry_pendulum_period_s: Some(13.5),
         twin_periods_50n_s: Some([4200.0, 1240.0]),
+        three_gyro_rolling_terms_rad: Some((0.012f64.to_radians(), -0.002f64.to_radians())),
         hermione_delta_v_m_per_s: Some(DV),
         hermione_latitude_rad: Some(LAT.to_radians()),
     }
@@ -69,21 +70,25 @@ fn textbook(three: bool, times: f64, three_period_s: f64) -> Vec<Entry> {
     let d = |x: f64| x.to_radians();
     let (ts, mus) = (5400.0, 2.6 / 5400.0);
     // The Sperry's and the Slough's calm readings carry their latitude error (−ρ tan L): the
-    // rolling errors are measured from them.
+    // rolling errors are measured from the reading their runs start from.
     let mut e = vec![
         entry(HARBOUR_50N, ANSCHUTZ_1906, &[("steady_error_rad", 0.0)]),
         entry(
             ROLLING_045,
             ANSCHUTZ_1906,
-            &[("rolling_error_rad", d(11.8))],
+            &[("rolling_error_rad", d(11.8)), ("start_error_rad", 0.0)],
         ),
         entry(
             ROLLING_000,
             ANSCHUTZ_1906,
-            &[("rolling_error_rad", d(0.01))],
+            &[("rolling_error_rad", d(0.01)), ("start_error_rad", 0.0)],
         ),
         entry(HARBOUR_50N, TWIN_1918, &[("steady_error_rad", 0.001)]),
-        entry(ROLLING_045, TWIN_1918, &[("rolling_error_rad", 0.021)]),
+        entry(
+            ROLLING_045,
+            TWIN_1918,
+            &[("rolling_error_rad", 0.021), ("start_error_rad", 0.001)],
+        ),
         entry(
             HARBOUR_50N,
             SPERRY_1911,
@@ -92,9 +97,16 @@ fn textbook(three: bool, times: f64, three_period_s: f64) -> Vec<Entry> {
         entry(
             ROLLING_045,
             SPERRY_1911,
-            &[("rolling_error_rad", SPERRY_CALM + 0.023)],
+            &[
+                ("rolling_error_rad", SPERRY_CALM + 0.023),
+                ("start_error_rad", SPERRY_CALM),
+            ],
         ),
-        entry(ROLLING_045, SLOUGH, &[("rolling_error_rad", -0.04)]),
+        entry(
+            ROLLING_045,
+            SLOUGH,
+            &[("rolling_error_rad", -0.04), ("start_error_rad", -0.042)],
+        ),
         entry(
             HARBOUR_50N,
             SLOUGH,
@@ -119,7 +131,7 @@ fn textbook(three: bool, times: f64, three_period_s: f64) -> Vec<Entry> {
             entry(
                 ROLLING_045,
                 THREE_GYRO_1912,
-                &[("rolling_error_rad", d(0.01))],
+                &[("rolling_error_rad", d(0.01)), ("start_error_rad", 0.0)],
             ),
             entry(
                 HARBOUR_50N,
@@ -181,17 +193,21 @@ fn the_verdict_follows_the_texts_numbers_and_refuses_others() {
     );
     let v = verdicts(&textbook(true, 2.06, 5400.0), &k);
     assert_eq!(v["three-gyro-period-70min"], Verdict::NotReproduced);
-    // A three-gyro whose roll error is larger than the Anschütz's "extremely small" one: refused.
-    let mut e = textbook(true, 2.06, 4200.0);
-    e.iter_mut()
-        .find(|x| x.scene == ROLLING_045 && x.design == THREE_GYRO_1912)
-        .expect("entry")
-        .metrics
-        .insert("rolling_error_rad".into(), 0.03);
-    assert_eq!(
-        verdicts(&e, &k)["three-gyro-roll-extremely-small"],
-        Verdict::NotReproduced
-    );
+    // A three-gyro whose roll error is over a tenth of the Anschütz's, or twice what (51)'s
+    // second-order terms give (though still small): refused.
+    for err in [0.03, 0.02f64.to_radians()] {
+        let mut e = textbook(true, 2.06, 4200.0);
+        e.iter_mut()
+            .find(|x| x.scene == ROLLING_045 && x.design == THREE_GYRO_1912)
+            .expect("entry")
+            .metrics
+            .insert("rolling_error_rad".into(), err);
+        assert_eq!(
+            verdicts(&e, &k)["three-gyro-roll-extremely-small"],
+            Verdict::NotReproduced,
+            "{err}"
+        );
+    }
     // The back-swing must be against the swing: the same sign is refused.
     let mut e = textbook(false, 2.06, 4200.0);
     let h = e
@@ -324,14 +340,12 @@ fn the_comparison_reproduces_the_texts_claims_on_the_shipped_designs() {
     };
     // The Sperry errs far less than the Anschütz under the same sea ("un progrès important").
     assert!(net(SPERRY_1911, ROLLING_045) < 0.25 * net(ANSCHUTZ_1906, ROLLING_045));
-    // Every compass's rolling error is quadrantal: on 000° it is a fraction of that on 045°.
-    // The three-gyro's is below 0.2° on both: what is left there comes from the second-order
-    // terms of its (51) (the oil's levels and the heel times the acceleration), not from the
-    // quadrantal mechanism, and heads North too.
+    // Every compass's rolling error is quadrantal: on 000° it is a fraction of that on 045°
+    // (the three-gyro's too: its second-order terms of (51) go as ⟨J_x J_y⟩, nothing heading
+    // North, now that the error is net of the equilibrium the run starts from).
     for d in &designs {
         assert!(
-            net(d, ROLLING_000) < 0.2 * net(d, ROLLING_045)
-                || (d == THREE_GYRO_1912 && net(d, ROLLING_045) < 0.2f64.to_radians()),
+            net(d, ROLLING_000) < 0.2 * net(d, ROLLING_045),
             "{d}: 000° {} vs 045° {}",
             net(d, ROLLING_000),
             net(d, ROLLING_045)
