@@ -336,6 +336,9 @@ pub mod bodies_record {
     /// A spring from the body to another: `<body>.spring.<name>`, a [`super::SpringDrawing`]'s
     /// [`super::SpringDrawing::metadata_value`].
     pub const SPRING: &str = "spring";
+    /// A linkage's rod from the body to another: `<body>.linkage.<name>`, a
+    /// [`super::SpringDrawing`]'s [`super::SpringDrawing::metadata_value`] (the same line).
+    pub const LINKAGE: &str = "linkage";
 
     /// The key of one body's entry: `<body>.<what>`.
     pub fn key(body: &str, what: &str) -> String {
@@ -350,6 +353,11 @@ pub mod bodies_record {
     /// The key of the spring `name` attached to `body`: `<body>.spring.<name>`.
     pub fn spring_key(body: &str, name: &str) -> String {
         format!("{body}.{SPRING}.{name}")
+    }
+
+    /// The key of the linkage `name` attached to `body`: `<body>.linkage.<name>`.
+    pub fn linkage_key(body: &str, name: &str) -> String {
+        format!("{body}.{LINKAGE}.{name}")
     }
 
     /// The key of the tank `name` carried by `body`: `<body>.tank.<name>`.
@@ -500,9 +508,9 @@ impl PotsDrawing {
     }
 }
 
-/// A spring between two bodies (the twin-gyro's HH′), as the viewer draws it: a line from
-/// `point_m` in the body whose key holds it to `other_point_m` in `other_body` (each in its
-/// body's frame).
+/// A spring between two bodies (the twin-gyro's HH′) or a linkage's rod (the three-gyro's, between
+/// G′ and G″), as the viewer draws it: a line from `point_m` in the body whose key holds it to
+/// `other_point_m` in `other_body` (each in its body's frame).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SpringDrawing {
     pub other_body: String,

@@ -38,8 +38,8 @@ mod tape;
 pub mod theory;
 
 pub use design::{
-    Compartment, CoordinateRole, CoordinateUnit, Design, Force, Pots, Root, Shape, SpinMode, Tank,
-    Valves,
+    Compartment, CoordinateRole, CoordinateUnit, Design, Force, Linkage, Pots, Root, Shape,
+    SpinMode, Tank, Valves,
 };
 pub use dual::{Jet, Real};
 pub use earth::{BaseEffects, Moored, ShipKinematics, ShipMotion};

@@ -629,6 +629,17 @@ fn bodies_metadata(model: &CompiledModel<ShipProgram>) -> BTreeMap<String, Strin
             );
         }
     }
+    for l in &model.design.linkages {
+        let drawing = SpringDrawing {
+            other_body: model.design.bodies[l.bodies[1]].name.clone(),
+            point_m: l.points_m[0],
+            other_point_m: l.points_m[1],
+        };
+        m.insert(
+            bodies_record::linkage_key(&model.design.bodies[l.bodies[0]].name, &l.name),
+            drawing.metadata_value(),
+        );
+    }
     for t in &model.design.tanks {
         let fields: Vec<String> = t
             .levels

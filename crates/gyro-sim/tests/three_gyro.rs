@@ -777,3 +777,54 @@ fn rolling_error_is_the_second_order_terms_of_51() {
     close(s * (shipped - iso), surface, 0.10, "free surfaces");
     close(s * shipped, heel + surface, 0.05, "shipped");
 }
+
+/// The linkage that ties G′ and G″ (their hinges at +β and −β) is drawn as a rod between arms on
+/// the two boxes: the recording's bodies record carries it for the viewer (`<body>.linkage.<name>`,
+/// the rod's ends turning with β), and a linkage to an unknown body, or from a body to itself, is
+/// refused with the file, the linkage and what is allowed.
+#[test]
+fn the_linkage_is_recorded_for_the_viewer_and_checked() {
+    let d = design(50.0, &[], &[]);
+    assert_eq!(d.linkages.len(), 1);
+    let l = &d.linkages[0];
+    let names = l.bodies.map(|b| d.bodies[b].name.as_str());
+    assert_eq!(names, ["west_box", "east_box"]);
+    // Recorded: 10 s of the harbour scene.
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("three-gyro-linkage");
+    std::fs::create_dir_all(&dir).expect("dir");
+    let path = dir.join("harbour.mcap");
+    let ov = SceneOverrides {
+        duration_s: Some(10.0),
+        ..Default::default()
+    };
+    let scene = gyro_sim::Scene::load("three-gyro-harbour-50n", &ov).expect("scene");
+    gyro_sim::record(&scene, &path, gyro_sim::RecordOptions::default()).expect("recorded");
+    let rec = gyro_mcap::Recording::open(&path).expect("opens");
+    let key = gyro_mcap::contract::bodies_record::linkage_key("west_box", &l.name);
+    let value = rec.metadata()["bodies"]
+        .get(&key)
+        .unwrap_or_else(|| panic!("{key} missing"))
+        .clone();
+    let want = gyro_mcap::contract::SpringDrawing {
+        other_body: "east_box".into(),
+        point_m: l.points_m[0],
+        other_point_m: l.points_m[1],
+    };
+    assert_eq!(value, want.metadata_value());
+    for (to, expect) in [
+        (r#"bodies = ["west_box", "hull"]"#, "unknown body `hull`"),
+        (
+            r#"bodies = ["west_box", "west_box"]"#,
+            "two different bodies",
+        ),
+    ] {
+        let text = DESIGN.replacen(r#"bodies = ["west_box", "east_box"]"#, to, 1);
+        let e = Design::from_toml("three.toml", &text, &[]).expect_err(expect);
+        let msg = e.to_string();
+        println!("{msg}");
+        assert!(
+            msg.contains("three.toml") && msg.contains("linkage.linkage") && msg.contains(expect),
+            "{msg}"
+        );
+    }
+}

@@ -54,9 +54,12 @@ pub(crate) struct BodyInfo {
     pub tanks: Vec<(String, TankInfo)>,
     /// Springs from this body to others, by name.
     pub springs: Vec<(String, SpringInfo)>,
+    /// Linkages' rods from this body to others, by name (drawn as springs are).
+    pub linkages: Vec<(String, SpringInfo)>,
 }
 
-/// A spring between two bodies as recorded (`gyro_mcap::contract::SpringDrawing`).
+/// A spring or a linkage's rod between two bodies as recorded
+/// (`gyro_mcap::contract::SpringDrawing`).
 #[derive(Debug, Clone, Deserialize)]
 pub(crate) struct SpringInfo {
     pub other_body: String,
@@ -393,10 +396,22 @@ fn bodies(
                     pots: Vec::new(),
                     tanks: Vec::new(),
                     springs: Vec::new(),
+                    linkages: Vec::new(),
                 },
             );
         }
         for (key, value) in entries {
+            if let Some((body, name)) = key.split_once(&format!(".{}.", bodies_record::LINKAGE)) {
+                let rod = parse_spring(value).map_err(|detail| ViewError::Metadata {
+                    path: path.to_path_buf(),
+                    key: format!("{}/{key}", bodies_record::NAME),
+                    detail,
+                })?;
+                if let Some(b) = out.get_mut(body) {
+                    b.linkages.push((name.to_owned(), rod));
+                }
+                continue;
+            }
             if let Some((body, name)) = key.split_once(&format!(".{}.", bodies_record::SPRING)) {
                 let spring = parse_spring(value).map_err(|detail| ViewError::Metadata {
                     path: path.to_path_buf(),

@@ -419,10 +419,11 @@ fn log_tank(
     Ok(())
 }
 
-/// Springs between bodies, at `<earth>/springs/<name>`: a line between the two attachment points
-/// at every pose shown, each point carried to the earth frame through its body's shown poses
-/// (so a tilt exaggeration moves the line with the bodies).
-fn log_springs(
+/// Springs between bodies, at `<earth>/springs/<name>`, and linkages' rods, at
+/// `<earth>/linkages/<name>`: a line between the two attachment points at every pose shown, each
+/// point carried to the earth frame through its body's shown poses (so a tilt exaggeration
+/// moves the line with the bodies).
+fn log_springs_and_linkages(
     rec: &RecordingStream,
     run: &RunData,
     shown: &[Shown],
@@ -455,8 +456,16 @@ fn log_springs(
         }
         None
     };
+    // Springs gold and thin, linkages' rods steel grey and thicker.
+    let kinds = [
+        ("springs", Color::from_rgb(200, 170, 60), 0.004),
+        ("linkages", Color::from_rgb(150, 160, 175), 0.006),
+    ];
     for (body, info) in &run.bodies {
-        for (name, spring) in &info.springs {
+        let lines = kinds.iter().zip([&info.springs, &info.linkages]);
+        for ((kind, color, radius), (name, spring)) in
+            lines.flat_map(|(k, list)| list.iter().map(move |l| (k, l)))
+        {
             let Some(&i) = index.get(body.as_str()) else {
                 continue;
             };
@@ -472,7 +481,7 @@ fn log_springs(
             let Some(strips) = strips else {
                 continue;
             };
-            let entity = format!("{earth}/springs/{}", crate::run::entity_name(name));
+            let entity = format!("{earth}/{kind}/{}", crate::run::entity_name(name));
             rec.send_columns(
                 entity.as_str(),
                 [sim_time(times)],
@@ -483,8 +492,8 @@ fn log_springs(
             rec.log_static(
                 entity,
                 &LineStrips3D::update_fields()
-                    .with_colors([Color::from_rgb(200, 170, 60)])
-                    .with_radii([(0.004 * scale_m) as f32])
+                    .with_colors([*color])
+                    .with_radii([(radius * scale_m) as f32])
                     .with_labels([name.as_str()]),
             )?;
         }
@@ -684,7 +693,7 @@ pub(crate) fn log_scene(
             .with_labels(["ship (schematic, not to scale)"]),
         )?;
     }
-    log_springs(rec, run, &shown, &earth, scale)?;
+    log_springs_and_linkages(rec, run, &shown, &earth, scale)?;
     log_overlays(rec, run, run_index, root, opts, 2.2 * scale)?;
     let mut bodies: Vec<String> = run.tracks.iter().map(|(n, _)| n.clone()).collect();
     bodies.sort();

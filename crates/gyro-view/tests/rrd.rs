@@ -477,9 +477,10 @@ fn the_default_fit_is_the_analysis_crates_and_is_drawn_over_the_data() {
 }
 
 /// A spring between two bodies: a line from its point on the gimbal to its point on the float,
-/// in the earth frame, at every pose shown, each end carried through its body's recorded poses.
+/// in the earth frame, at every pose shown, each end carried through its body's recorded poses;
+/// a linkage's rod (from the float to the gimbal) likewise, under `linkages/`.
 #[test]
-fn springs_are_drawn_between_their_bodies() {
+fn springs_and_linkages_are_drawn_between_their_bodies() {
     let dir = workdir("spring");
     let run = dir.join("spring.mcap");
     common::write_recording_with_pots(&run, SAMPLES, RATE_HZ);
@@ -492,9 +493,6 @@ fn springs_are_drawn_between_their_bodies() {
     view(std::slice::from_ref(&run), &opts).expect("view");
     let Some(py) = rerun_python() else { return };
     let d = dump(&py, &rrd);
-    let entity = "/runs/spring/earth/springs/hh";
-    let (t, strips) = temporal(&d, entity, "strips");
-    assert!(t.len() > 100, "{entity}: {} times", t.len());
     // p in a frame, carried up the synthetic chain to the earth frame.
     let rotate = |q: [f64; 4], v: [f64; 3]| {
         let (x, y, z, w) = (q[0], q[1], q[2], q[3]);
@@ -521,26 +519,36 @@ fn springs_are_drawn_between_their_bodies() {
         }
         x
     };
-    let s = common::spring();
-    for (k, &ns) in t.iter().enumerate() {
-        let time = ns as f64 * 1e-9;
-        let ends = [
-            in_earth("gimbal", s.point_m, time),
-            in_earth(&s.other_body, s.other_point_m, time),
-        ];
-        let strip: Vec<Vec<f64>> = strips[k][0]
-            .as_array()
-            .expect("a strip")
-            .iter()
-            .map(f64s)
-            .collect();
-        assert_eq!(strip.len(), 2, "{entity}[{k}]");
-        for (got, want) in strip.iter().zip(&ends) {
-            for i in 0..3 {
-                assert!(
-                    (got[i] - want[i]).abs() < 1e-5,
-                    "{entity}[{k}]: {got:?} vs {want:?}"
-                );
+    for (entity, body, s) in [
+        ("/runs/spring/earth/springs/hh", "gimbal", common::spring()),
+        (
+            "/runs/spring/earth/linkages/rod",
+            "float",
+            common::linkage(),
+        ),
+    ] {
+        let (t, strips) = temporal(&d, entity, "strips");
+        assert!(t.len() > 100, "{entity}: {} times", t.len());
+        for (k, &ns) in t.iter().enumerate() {
+            let time = ns as f64 * 1e-9;
+            let ends = [
+                in_earth(body, s.point_m, time),
+                in_earth(&s.other_body, s.other_point_m, time),
+            ];
+            let strip: Vec<Vec<f64>> = strips[k][0]
+                .as_array()
+                .expect("a strip")
+                .iter()
+                .map(f64s)
+                .collect();
+            assert_eq!(strip.len(), 2, "{entity}[{k}]");
+            for (got, want) in strip.iter().zip(&ends) {
+                for i in 0..3 {
+                    assert!(
+                        (got[i] - want[i]).abs() < 1e-5,
+                        "{entity}[{k}]: {got:?} vs {want:?}"
+                    );
+                }
             }
         }
     }

@@ -15,6 +15,7 @@ mod bodies;
 mod coordinates;
 mod document;
 mod forces;
+mod linkage;
 mod pots;
 mod reading;
 mod stability;
@@ -26,6 +27,8 @@ use bodies::BodyFile;
 use coordinates::CoordinateFile;
 use document::{apply_override, resolve_expressions};
 use forces::ForceFile;
+pub use linkage::Linkage;
+use linkage::LinkageFile;
 use pots::PotsFile;
 use reading::ReadingFile;
 use serde::Deserialize;
@@ -127,6 +130,8 @@ struct DesignFile {
     pots: Vec<PotsFile>,
     #[serde(default)]
     tank: Vec<TankFile>,
+    #[serde(default)]
+    linkage: Vec<LinkageFile>,
     reading: ReadingFile,
     #[serde(default)]
     stability: Vec<StabilityFile>,
@@ -329,6 +334,8 @@ pub struct Design {
     pub pots: Vec<Pots>,
     /// Liquid tanks of N compartments (`[[tank]]`); their levels are the last coordinates.
     pub tanks: Vec<Tank>,
+    /// Rods between bodies whose hinges are already tied (`[[linkage]]`), drawn only.
+    pub linkages: Vec<Linkage>,
     pub reading_body: usize,
     pub reading_axis: [f64; 3],
     /// The `[[stability]]` conditions, evaluated (all met unless the design allows otherwise).
@@ -457,6 +464,7 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
     }
     let (tanks, tank_forces) = tank::tanks(&f.tank, &body_names, &mut coordinates, &src)?;
     forces.extend(tank_forces);
+    let linkages = linkage::linkages(&f.linkage, &body_names, &src)?;
     let (reading_body, reading_axis) = reading::reading(&f.reading, &body_names, &src)?;
     let stability = stability::stability(&f.stability, f.allow_unstable, &src)?;
     Ok(Design {
@@ -470,6 +478,7 @@ fn build(file: &str, text: &str, f: DesignFile) -> Result<Design, InputError> {
         forces,
         pots,
         tanks,
+        linkages,
         reading_body,
         reading_axis,
         stability,

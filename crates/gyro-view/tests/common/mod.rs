@@ -110,6 +110,15 @@ pub fn spring() -> SpringDrawing {
     }
 }
 
+/// The linkage's rod [`write_recording_with_pots`] also puts between the float and the gimbal.
+pub fn linkage() -> SpringDrawing {
+    SpringDrawing {
+        other_body: "gimbal".into(),
+        point_m: [0.0, -0.05, 0.07],
+        other_point_m: [0.02, 0.05, 0.0],
+    }
+}
+
 /// Writes `n` samples at `rate_hz` to `path`.
 pub fn write_recording(path: &Path, n: usize, rate_hz: f64) {
     write(path, n, rate_hz, false);
@@ -291,6 +300,10 @@ fn bodies_metadata(with_pots: bool) -> BTreeMap<String, String> {
         bodies.insert(
             bodies_record::spring_key("gimbal", "hh"),
             spring().metadata_value(),
+        );
+        bodies.insert(
+            bodies_record::linkage_key("float", "rod"),
+            linkage().metadata_value(),
         );
     }
     bodies
