@@ -19,7 +19,11 @@ gyrolab's side runs as `cargo test --release -p gyro-sim --test integration accu
 (env PEER_OUT=<json>). Ratios are taken at matched error: for a target error E, each side's cost
 is the least wall time of any of its runs whose achieved error is <= E.
 
-Usage: bash analysis/bench/run.sh [--skip-cargo FILE.json] [--out results.json]
+Both sides run alternately (--rounds, default 2) and each point keeps its least wall time: the
+machine's speed drifts over minutes, so one round of each side, one after the other, compared two
+different hours (runs of the same code differed by up to 2x in their ratios).
+
+Usage: bash analysis/bench/run.sh [--rounds N] [--skip-cargo FILE.json] [--out results.json]
 """
 
 import argparse
@@ -54,12 +58,34 @@ def gyrolab_side(skip):
     out = os.path.join(tempfile.mkdtemp(), "gyrolab-peer.json")
     env = dict(os.environ, PEER_OUT=out)
     env.setdefault("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
-    subprocess.run(
-        ["cargo", "test", "--release", "-q", "-p", "gyro-sim", "--test", "integration",
-         "accuracy::peer_side", "--", "--ignored", "--exact"],
-        cwd=ROOT, env=env, check=True, stdout=subprocess.DEVNULL)
+    test = ["accuracy::peer_side", "--ignored", "--exact"]
+    # PEER_GYROLAB_BIN: gyro-sim's integration-test binary, already built (no cargo call).
+    binary = os.environ.get("PEER_GYROLAB_BIN")
+    cmd = [binary, *test] if binary else [
+        "cargo", "test", "--release", "-q", "-p", "gyro-sim", "--test", "integration",
+        test[0], "--", *test[1:]]
+    subprocess.run(cmd, cwd=os.path.join(ROOT, "crates", "gyro-sim") if binary else ROOT,
+                   env=env, check=True, stdout=subprocess.DEVNULL)
     with open(out) as f:
         return json.load(f)
+
+
+def fastest(rounds):
+    """Each point at its least wall time over the rounds (the errors are the same every round:
+    both sides are deterministic), and each round's median wall time over all points relative to
+    the first round's, per side: how far the machine's speed moved during the benchmark."""
+    key = lambda p: (p["implementation"], p["method"], p["rtol"])
+    best = {}
+    for pts in rounds:
+        for p in pts:
+            k = key(p)
+            if k not in best or p["wall_s"] < best[k]["wall_s"]:
+                best[k] = dict(p)
+    drift = []
+    for pts in rounds:
+        r = [p["wall_s"] / best[key(p)]["wall_s"] for p in pts if best[key(p)]["wall_s"] > 0]
+        drift.append(float(np.median(r)) if r else float("nan"))
+    return list(best.values()), drift
 
 
 class OverBudget(Exception):
@@ -238,14 +264,26 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--skip-cargo", help="read gyrolab's side from this JSON instead of running cargo")
     ap.add_argument("--out", help="write both sides' points and the ratios as JSON")
+    ap.add_argument("--rounds", type=int, default=2,
+                    help="run the two sides alternately this many times and keep each point's "
+                         "least wall time (default 2: the machine's speed drifts over minutes, "
+                         "and one round of each side compares two different hours)")
     args = ap.parse_args()
     t0 = time.perf_counter()
-    g = gyrolab_side(args.skip_cargo)
-    v, p4 = g["villarceau"], g["anschutz4"]
-    sv = villarceau_points(v, g["atol_factor"])
-    sa = anschutz_points(p4)
-    sl = engine_linear_points(g["anschutz_linear"])
-    ours = g["points"]
+    ours_rounds, sv_r, sa_r, sl_r = [], [], [], []
+    for r in range(max(1, args.rounds)):
+        g = gyrolab_side(args.skip_cargo)
+        ours_rounds.append(g["points"])
+        v, p4 = g["villarceau"], g["anschutz4"]
+        sv_r.append(villarceau_points(v, g["atol_factor"]))
+        sa_r.append(anschutz_points(p4))
+        sl_r.append(engine_linear_points(g["anschutz_linear"]))
+        print(f"round {r + 1} done at {time.perf_counter() - t0:.0f} s", flush=True)
+    ours, drift_ours = fastest(ours_rounds)
+    sv, drift_sv = fastest(sv_r)
+    sa, _ = fastest(sa_r)
+    sl, _ = fastest(sl_r)
+    g["points"] = ours
     print(f"SciPy {scipy.__version__}, NumPy {np.__version__}, Python {sys.version.split()[0]}")
     print(f"Villarceau: g/a = {v['g_over_a']:.6e} /s^2, delta = {v['delta']:.3e}, "
           f"gamma0 = 90 deg, T = {v['period']:.9f} s, {v['periods']:.0f} periods; "
@@ -267,6 +305,10 @@ def main():
          "best", lambda p: True),
     ])[1:]
     print(table(rows))
+    print("\neach round's median wall time over the best (1.00 = the fastest round everywhere): "
+          f"gyrolab {', '.join(f'{x:.2f}' for x in drift_ours)}; "
+          f"SciPy (Villarceau) {', '.join(f'{x:.2f}' for x in drift_sv)}"
+          + (" (gyrolab's side read from a file: one round)" if args.skip_cargo else ""))
     print("\nall points (error, wall):")
     for p in ours + sv + sa + sl:
         e = "failed" if p["error"] is None else f"{p['error']:.2e}"
@@ -276,7 +318,9 @@ def main():
     if args.out:
         with open(args.out, "w") as f:
             json.dump({"gyrolab": g, "scipy_villarceau": sv, "scipy_anschutz4": sa,
-                       "scipy_anschutz_linear": sl, "table": rows}, f, indent=1)
+                       "scipy_anschutz_linear": sl, "table": rows, "rounds": args.rounds,
+                       "drift": {"gyrolab": drift_ours, "scipy_villarceau": drift_sv}}, f,
+                      indent=1)
 
 
 if __name__ == "__main__":
