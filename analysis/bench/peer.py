@@ -72,8 +72,9 @@ def gyrolab_side(skip):
 
 def fastest(rounds):
     """Each point at its least wall time over the rounds (the errors are the same every round:
-    both sides are deterministic), and each round's median wall time over all points relative to
-    the first round's, per side: how far the machine's speed moved during the benchmark."""
+    both sides are deterministic), and each round's median ratio of a point's wall time to its
+    least: how far the machine's speed moved during the benchmark (1.00 = that round was the
+    fastest everywhere)."""
     key = lambda p: (p["implementation"], p["method"], p["rtol"])
     best = {}
     for pts in rounds:

@@ -401,49 +401,36 @@ fn bodies(
             );
         }
         for (key, value) in entries {
-            if let Some((body, name)) = key.split_once(&format!(".{}.", bodies_record::LINKAGE)) {
-                let rod = parse_spring(value).map_err(|detail| ViewError::Metadata {
-                    path: path.to_path_buf(),
-                    key: format!("{}/{key}", bodies_record::NAME),
-                    detail,
-                })?;
-                if let Some(b) = out.get_mut(body) {
-                    b.linkages.push((name.to_owned(), rod));
-                }
-                continue;
-            }
-            if let Some((body, name)) = key.split_once(&format!(".{}.", bodies_record::SPRING)) {
-                let spring = parse_spring(value).map_err(|detail| ViewError::Metadata {
-                    path: path.to_path_buf(),
-                    key: format!("{}/{key}", bodies_record::NAME),
-                    detail,
-                })?;
-                if let Some(b) = out.get_mut(body) {
-                    b.springs.push((name.to_owned(), spring));
-                }
-                continue;
-            }
-            if let Some((body, name)) = key.split_once(&format!(".{}.", bodies_record::TANK)) {
-                let tank = parse_tank(value).map_err(|detail| ViewError::Metadata {
-                    path: path.to_path_buf(),
-                    key: format!("{}/{key}", bodies_record::NAME),
-                    detail,
-                })?;
-                if let Some(b) = out.get_mut(body) {
-                    b.tanks.push((name.to_owned(), tank));
-                }
-                continue;
-            }
-            let Some((body, name)) = key.split_once(&format!(".{}.", bodies_record::POTS)) else {
-                continue;
-            };
-            let pots = parse_pots(value).map_err(|detail| ViewError::Metadata {
+            let bad = |detail: String| ViewError::Metadata {
                 path: path.to_path_buf(),
                 key: format!("{}/{key}", bodies_record::NAME),
                 detail,
-            })?;
-            if let Some(b) = out.get_mut(body) {
-                b.pots.push((name.to_owned(), pots));
+            };
+            let part = |what: &str| key.split_once(&format!(".{what}."));
+            // A linkage's rod is recorded as a spring's line is; only the list differs.
+            let line = part(bodies_record::LINKAGE)
+                .map(|p| (p, true))
+                .or_else(|| part(bodies_record::SPRING).map(|p| (p, false)));
+            if let Some(((body, name), linkage)) = line {
+                let drawing = parse_spring(value).map_err(bad)?;
+                if let Some(b) = out.get_mut(body) {
+                    let list = if linkage {
+                        &mut b.linkages
+                    } else {
+                        &mut b.springs
+                    };
+                    list.push((name.to_owned(), drawing));
+                }
+            } else if let Some((body, name)) = part(bodies_record::TANK) {
+                let tank = parse_tank(value).map_err(bad)?;
+                if let Some(b) = out.get_mut(body) {
+                    b.tanks.push((name.to_owned(), tank));
+                }
+            } else if let Some((body, name)) = part(bodies_record::POTS) {
+                let pots = parse_pots(value).map_err(bad)?;
+                if let Some(b) = out.get_mut(body) {
+                    b.pots.push((name.to_owned(), pots));
+                }
             }
         }
     }
