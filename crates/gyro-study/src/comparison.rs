@@ -1037,10 +1037,20 @@ real root of (55)) and the twin-gyro are still 0.064° and 0.052° from equilibr
 - The rolling scenes integrate with DOP853 (rtol 1e-7, atol 1e-6) like the shipped rolling scenes; a study sets one \
 integrator per scene, not per design, so a design with very stiff parts (a many-compartment tank) runs explicit there.\n\
 - The twin-gyro applies the compensation (54) that the factor (61) assumes; (61) is computed from the design's own \
-x = kl², y = M and τ, and reaches 2/3 only for M ≫ x, τ. The rolling scenes run `gyroscopic` fidelity, which takes the \
-twin-gyro's boxes as tilting with the spider when it solves for the spider's motion: at `full` the same scene gives \
-about 1.5 times the error (1.16° against 0.77°), 0.82 of the factor (61) times the single frame's, and the growth of \
-(61) with M within 5 % (`twin_gyro::rolling_error_follows_factor_61` in gyro-sim's tests).\n\
+x = kl², y = M and τ, and reaches 2/3 only for M ≫ x, τ. At `full` fidelity the twin-gyro gives 0.82 of the factor (61) \
+times the single frame's, and the growth of (61) with M within 5 % (`twin_gyro::rolling_error_follows_factor_61` in \
+gyro-sim's tests).\n\
+- The rolling scenes run `gyroscopic` fidelity, which takes the kinetic energy with the gyros' precessional rates at \
+zero: a gyro carried on a swinging frame (the Sperry's and the Slough's gyro-ballistic pendulum, the twin-gyro's spider) \
+is counted as tilting with it, where the real gyro holds its tilt. Where the gyros ride the sensitive element itself \
+(Anschütz 1906, three-gyro) it does not matter. Rolling error on 045° net of the calm reading, `gyroscopic` against \
+`full` (`gyrolab run scenes/compare-rolling-045.toml --design <d> [--fidelity full]`, then `gyrolab analyze`; \
+2026-12-04): Anschütz 1906 −11.789° / −11.788°, three-gyro 0.183° / 0.186°, but Sperry 1911 1.307° / 0.556°, Slough \
+−0.037° / 0.829°, twin-gyro −0.768° / −1.157°. At `full` the Sperry keeps 8 % of its Anschütz-type error (|Re H(is)| of \
+(48) is 12.5 %), below the 10 % by which its claim reads *insufficient*. At `full` the twin's rolling error does not move with its boxes' pitch \
+inertia (1.157° with 0.12, 0 and 0.5 kg·m²); at `gyroscopic` it does (0.768°, 1.000°, 0.026°). `full` costs 15–90 \
+times the wall time of `gyroscopic` here (it follows the nutation: 1.3–2.1 M steps against 13–160 k), \
+which is why the comparison does not run it.\n\
 - *Who errs least where* ranks by one key error per scene; the per-scene tables are the evidence.\n\n";
 
 /// The error a scene is judged by (None: not ranked).
