@@ -562,8 +562,8 @@ fn rolling_error(overrides: &[(&str, f64)], fidelity: &str) -> (f64, TwinGyro) {
 /// (factor 0.610): the error grows between the two as the factor does, within 10 %; each is
 /// 0.78–0.82 of the factor times the single frame's closed form ½ sinΔ cosΔ (J₀/g)² 3ap/(2τ)
 /// (measured 1.157° and 4.817° against 10.111°), asserted within 25 %: the 20 % is not found
-/// yet (the same closed form gives the Anschütz 1906 within 7 %). `gyroscopic` fidelity, which
-/// takes the boxes as tilting with the spider when it solves for the spider's motion, gives 0.77°
+/// yet (the same closed form gives the Anschütz 1906 within 7 %). `gyroscopic` fidelity, whose
+/// precession equations count the boxes as rolling with the ship (docs/designs.md), gives 0.77°
 /// where `full` gives 1.16° on the shipped design: the comparison's rolling scenes run it, and
 /// the comparison's verdict on (61) reads that. And at `full` the boxes' pitch inertia does not
 /// matter (the gyros hold the boxes' tilt): 0.5 kg·m² instead of 0.12 changes the error < 1 %.
@@ -606,7 +606,7 @@ fn rolling_error_follows_factor_61() {
     }
     // The gyros hold their boxes' absolute tilt, so the boxes' pitch inertia does not swing with
     // the spider: quadrupled, it leaves the error within 1 % (measured 1.157° both; the
-    // `gyroscopic` fidelity, which tilts them with the spider, moves from 0.768° to 0.026°).
+    // `gyroscopic` fidelity moves from 0.768° to 0.026°).
     let (heavy, _) = measure(&[("box_inertia_y_kg_m2", 0.5), ("box_inertia_z_kg_m2", 0.5)]);
     assert!(
         (heavy / shipped - 1.0).abs() < 0.01,
