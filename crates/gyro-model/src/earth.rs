@@ -67,6 +67,11 @@ pub trait ShipMotion: Sync {
     /// True when the ship never moves, turns or rolls (a harbour): the model then reads the
     /// constant kinematics once and compiles no ship-motion terms.
     fn is_stationary(&self) -> bool;
+    /// True when the ship rolls or pitches (a sea of nonzero amplitude): `gyroscopic` fidelity
+    /// then carries gyros on swinging frames (`crate::gyroscopic`). Any motion by default.
+    fn rolls(&self) -> bool {
+        !self.is_stationary()
+    }
     /// The largest |latitude| reached over [0, t_end] (checked against the pole).
     fn max_abs_latitude_rad(&self, t_end: f64) -> f64;
 }

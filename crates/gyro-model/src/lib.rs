@@ -5,9 +5,10 @@
 //! energies by exact automatic differentiation on dual numbers (`dual`): once in world axes as
 //! the plain reference (`reference_engine`), and again in each body's own axes as the model
 //! evaluates it (`body_axes`, held to the reference by the tests); the compiled model that a
-//! scene's effects and a fidelity select (`model`), its equations recorded once as straight-line
-//! programs (`tape`) and, for the shipped designs, compiled ahead of time (`native`); and the
-//! closed-form theory of the reference texts that tests hold the engine to (`theory`).
+//! scene's effects and a fidelity select (`model`, with the `gyroscopic` fidelity's reductions in
+//! `gyroscopic`), its equations recorded once as straight-line programs (`tape`) and, for the
+//! shipped designs, compiled ahead of time (`native`); and the closed-form theory of the
+//! reference texts that tests hold the engine to (`theory`).
 //!
 //! Public are the modules other crates read (`constants`, `earth`, `error`, `linalg`, `theory`)
 //! and the items re-exported below; the engine's internals stay inside the crate.
@@ -30,6 +31,7 @@ pub mod earth;
 pub mod error;
 mod expr;
 mod force_elements;
+mod gyroscopic;
 pub mod linalg;
 mod model;
 mod native;

@@ -15,6 +15,7 @@ use crate::body_axes::{self, BodyAxesChain};
 use crate::design::{CoordinateRole, Design, Force, Root, SpinMode};
 use crate::dual::{Jet, M3, Real, V3};
 use crate::earth::{BaseEffects, ShipMotion, apparent_gravity, base_motion};
+use crate::gyroscopic;
 use crate::linalg::{self, solve_in_place};
 use crate::reference_engine::{
     Chain, EvalInput, EvalOutput, MAX_COORDINATES, body_poses, evaluate_any,
@@ -295,11 +296,20 @@ pub const MAX_MOTORS: usize = 4;
 const MAX_STATES: usize = 2 * MAX_COORDINATES + MAX_MOTORS;
 
 /// The base's motion as the equations take it: its rotation and rate to the world, each with
-/// its time derivative, and the apparent gravity (world axes).
-type Base<T> = (M3<Jet<T, 1>>, V3<Jet<T, 1>>, [T; 3]);
+/// its time derivative, the apparent gravity (world axes); then ġ, R̈ and ω̈, zero unless the
+/// model carries its gyros ([`crate::gyroscopic::shifted_base`] is their only reader).
+pub(crate) type Base<T> = (
+    M3<Jet<T, 1>>,
+    V3<Jet<T, 1>>,
+    [T; 3],
+    [T; 3],
+    [[T; 3]; 3],
+    [T; 3],
+);
 
-/// Scalars of a [`Base`] when it is a tape's input (a moving base): R and Ṙ, ω and ω̇, g.
-const BASE_INPUTS: usize = 27;
+/// Scalars of a [`Base`] when it is a tape's input (a moving base): R and Ṙ, ω and ω̇, g, ġ,
+/// R̈, ω̈.
+const BASE_INPUTS: usize = 42;
 
 /// Writes a base's scalars in the tape's input order.
 fn base_scalars<T: Real>(b: &Base<T>, out: &mut [T]) {
@@ -311,6 +321,11 @@ fn base_scalars<T: Real>(b: &Base<T>, out: &mut [T]) {
         out[18 + i] = b.1.0[i].v;
         out[21 + i] = b.1.0[i].d[0];
         out[24 + i] = b.2[i];
+        out[27 + i] = b.3[i];
+        for j in 0..3 {
+            out[30 + 3 * i + j] = b.4[i][j];
+        }
+        out[39 + i] = b.5[i];
     }
 }
 
@@ -328,6 +343,9 @@ fn base_from_scalars<T: Real>(s: &[T]) -> Base<T> {
             d: [s[21 + i]],
         })),
         [s[24], s[25], s[26]],
+        [s[27], s[28], s[29]],
+        std::array::from_fn(|i| std::array::from_fn(|j| s[30 + 3 * i + j])),
+        [s[39], s[40], s[41]],
     )
 }
 
@@ -351,6 +369,10 @@ pub struct CompiledModel<M: ShipMotion> {
     precessional_rows: Vec<usize>,
     inertial_rows: Vec<usize>,
     drop_full: Vec<bool>,
+    /// `gyroscopic` fidelity carries the precessional coordinates along the inertial ones (the
+    /// slow manifold to first order, [`crate::gyroscopic::carried_rates`]): on a rolling base,
+    /// for designs with both kinds of coordinate.
+    carried: bool,
     /// The chain compiled for evaluation in body axes (what `rhs` and `jacobian` use).
     body_axes: BodyAxesChain,
     /// No servo relation: the reduced equations are the chain's own.
@@ -576,6 +598,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             precessional_rows: Vec::new(),
             inertial_rows: (0..ni).collect(),
             drop_full: Vec::new(),
+            carried: false,
             body_axes,
             no_servo: ni == n,
             motors,
@@ -968,6 +991,14 @@ impl<M: ShipMotion> CompiledModel<M> {
         for (col, &i) in self.independent.iter().enumerate() {
             self.drop_full[i] = self.precessional[col];
         }
+        // Only a rolling base turns fast enough for the precession equations' kept base-rate
+        // terms (T₀, T₁) to matter against their dropped T₂ (docs/designs.md, "gyroscopic
+        // fidelity on a rolling sea"): elsewhere (a calm sea included) the plain reduction is
+        // kept, Lagrangian and four times cheaper.
+        self.carried = self.effects.base.roll_pitch
+            && self.motion.rolls()
+            && !self.precessional_rows.is_empty()
+            && !self.inertial_rows.is_empty();
     }
 
     /// The gyroscopic layout of a full-layout state: q, the rates of the inertial coordinates,
@@ -1203,28 +1234,48 @@ impl<M: ShipMotion> CompiledModel<M> {
                     M3(s.r.0.map(|r| r.map(lift))),
                     V3(s.w.0.map(lift)),
                     s.g.map(T::cst),
+                    [T::zero(); 3],
+                    [[T::zero(); 3]; 3],
+                    [T::zero(); 3],
                 )
             }
             None => {
                 let (r, w) = base_motion(&self.motion, self.chain.ship_root, &self.effects.base, t);
-                (
-                    r,
-                    w,
-                    apparent_gravity(&self.motion, &self.effects.base, self.pivot_m, t.re())
-                        .map(T::cst),
-                )
+                let gravity =
+                    |t| apparent_gravity(&self.motion, &self.effects.base, self.pivot_m, t);
+                let g = gravity(t.re());
+                let mut g_dot = [T::zero(); 3];
+                let mut r_dd = [[T::zero(); 3]; 3];
+                let mut w_dd = [T::zero(); 3];
+                if self.carried {
+                    // Central difference over ±1 ms: the sea's periods are seconds, so the
+                    // truncation is ~(2π·1e-3/T)²/6 < 1e-7 of ġ and the round-off ~1e-12 m/s³.
+                    const H: f64 = 1e-3;
+                    let (gp, gm) = (gravity(t.re() + H), gravity(t.re() - H));
+                    g_dot = std::array::from_fn(|i| T::cst((gp[i] - gm[i]) / (2.0 * H)));
+                    // R̈ and ω̈ exactly: the base's motion on a time jet.
+                    let tj = Jet {
+                        v: t.re(),
+                        d: [1.0],
+                    };
+                    let (r2, w2) =
+                        base_motion(&self.motion, self.chain.ship_root, &self.effects.base, tj);
+                    r_dd = r2.0.map(|row| row.map(|x| T::cst(x.d[0].d[0])));
+                    w_dd = w2.0.map(|x| T::cst(x.d[0].d[0]));
+                }
+                (r, w, g.map(T::cst), g_dot, r_dd, w_dd)
             }
         }
     }
 
     /// Forms the reduced equations with the world-axes reference engine
     /// ([`crate::reference_engine::evaluate`]): M_red (ni×ni), K_red (ni×ni), c_red (ni) at
-    /// (t, q_ind, qd_ind, u_ind).
+    /// (base, q_ind, qd_ind, u_ind).
     #[allow(clippy::too_many_arguments)]
     fn reduced_reference<T: Real>(
         &self,
         drop_precessional_inertia: bool,
-        t: T,
+        base: &Base<T>,
         q_ind: &[T],
         qd_ind: &[T],
         u_ind: &[T],
@@ -1241,7 +1292,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         self.expand(q_ind, &mut q[..n], true);
         self.expand(qd_ind, &mut qd[..n], false);
         self.expand(u_ind, &mut u[..n], false);
-        let (r, w, g) = self.base_at(t);
+        let (r, w, g, ..) = base;
         let mut m = [T::zero(); MX * MX];
         let mut k = [T::zero(); MX * MX];
         let mut c = [T::zero(); MX];
@@ -1255,9 +1306,9 @@ impl<M: ShipMotion> CompiledModel<M> {
                 &[]
             },
             spin_momentum: &self.spin_momentum,
-            world_from_base: &r,
-            base_rate: &w,
-            gravity: g,
+            world_from_base: r,
+            base_rate: w,
+            gravity: *g,
         };
         let mut out = EvalOutput {
             m: &mut m[..n * n],
@@ -1296,7 +1347,39 @@ impl<M: ShipMotion> CompiledModel<M> {
         let mut k = [T::zero(); MX * MX];
         let mut c = [T::zero(); MX];
         let q = &x[..ni];
+        let base = self.base_at(t);
         match fidelity {
+            Fidelity::Gyroscopic if self.carried => {
+                let eval = |drop: bool,
+                            shift: f64,
+                            q: &[T],
+                            qd: &[T],
+                            mn: &mut [[T; MX]; MX],
+                            kn: &mut [[T; MX]; MX],
+                            cn: &mut [T; MX]| {
+                    let b = gyroscopic::shifted_base(&base, shift);
+                    self.reduced_reference(
+                        drop,
+                        &b,
+                        q,
+                        qd,
+                        qd,
+                        &mut m[..ni * ni],
+                        &mut k[..ni * ni],
+                        &mut c[..ni],
+                    );
+                    for i in 0..ni {
+                        cn[i] = c[i];
+                        for j in 0..ni {
+                            mn[i][j] = m[i * ni + j];
+                            kn[i][j] = k[i * ni + j];
+                        }
+                    }
+                };
+                let mis: Vec<usize> = (0..ni).filter(|&j| !self.precessional[j]).collect();
+                let gi: Vec<usize> = (0..ni).filter(|&j| self.precessional[j]).collect();
+                gyroscopic::carried_rates::<T, MX>(&gi, &mis, q, &x[ni..ni + mis.len()], eval, dx)
+            }
             Fidelity::Gyroscopic => {
                 let mut qd = [T::zero(); MX];
                 let mut mi = 0;
@@ -1309,7 +1392,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                 let u = qd;
                 self.reduced_reference(
                     true,
-                    t,
+                    &base,
                     q,
                     &qd[..ni],
                     &u[..ni],
@@ -1364,7 +1447,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                 let qd = &x[ni..2 * ni];
                 self.reduced_reference(
                     false,
-                    t,
+                    &base,
                     q,
                     qd,
                     qd,
@@ -1425,7 +1508,7 @@ impl<M: ShipMotion> CompiledModel<M> {
     ) {
         let n = self.chain.n;
         let ni = self.independent.len();
-        let (r, w, g) = base;
+        let (r, w, g, ..) = base;
         let drop: &[bool] = if drop_precessional_inertia {
             &self.drop_full
         } else {
@@ -1497,7 +1580,7 @@ impl<M: ShipMotion> CompiledModel<M> {
     ) {
         let n = self.chain.n;
         let ni = self.independent.len();
-        let (rb, w, g) = base;
+        let (rb, w, g, ..) = base;
         if self.no_servo {
             let inp = EvalInput {
                 q: q_ind,
@@ -1574,6 +1657,30 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
         let spins = &spin_states[..n_motors];
         match fidelity {
+            Fidelity::Gyroscopic if self.carried => {
+                let eval = |drop: bool,
+                            shift: f64,
+                            q: &[T],
+                            qd: &[T],
+                            m: &mut [[T; N]; N],
+                            k: &mut [[T; N]; N],
+                            c: &mut [T; N]| {
+                    let mut sp = spin_states;
+                    for s in &mut sp[..n_motors] {
+                        s.1 += s.2 * shift;
+                    }
+                    let b = gyroscopic::shifted_base(base, shift);
+                    self.reduced_n::<T, N>(drop, &b, q, qd, qd, &sp[..n_motors], m, k, c);
+                };
+                gyroscopic::carried_rates::<T, N>(
+                    &self.precessional_rows,
+                    &self.inertial_rows,
+                    q,
+                    &x[ni..ni + self.inertial_rows.len()],
+                    eval,
+                    dx,
+                )
+            }
             Fidelity::Gyroscopic => {
                 let gi = &self.precessional_rows;
                 let mis = &self.inertial_rows;
@@ -1592,47 +1699,11 @@ impl<M: ShipMotion> CompiledModel<M> {
                     &mut k,
                     &mut c,
                 );
-                // Precession equations: K_gg q̇_g = −(c_g + K_gm q̇_m).
-                let ng = gi.len();
-                let mut a = [[T::zero(); N]; N];
-                let mut r = [T::zero(); N];
-                for (a_r, &i) in gi.iter().enumerate() {
-                    let mut s = c[i];
-                    for &j in mis {
-                        s += k[i][j] * qd[j];
-                    }
-                    r[a_r] = -s;
-                    for (a_c, &j) in gi.iter().enumerate() {
-                        a[a_r][a_c] = k[i][j];
-                    }
-                }
-                if !linalg::solve_nested(&mut a, &mut r, ng) {
+                if !gyroscopic::precession_rates(gi, mis, &k, &c, &mut qd) {
                     return false;
                 }
-                for (a_r, &i) in gi.iter().enumerate() {
-                    qd[i] = r[a_r];
-                }
                 dx[..ni].copy_from_slice(&qd[..ni]);
-                let nm = mis.len();
-                if nm > 0 {
-                    let mut mm = [[T::zero(); N]; N];
-                    let mut rm = [T::zero(); N];
-                    for (a_r, &i) in mis.iter().enumerate() {
-                        let mut s = c[i];
-                        for j in 0..ni {
-                            s += k[i][j] * qd[j];
-                        }
-                        rm[a_r] = s;
-                        for (a_c, &j) in mis.iter().enumerate() {
-                            mm[a_r][a_c] = m[i][j];
-                        }
-                    }
-                    if !linalg::solve_nested(&mut mm, &mut rm, nm) {
-                        return false;
-                    }
-                    dx[ni..ni + nm].copy_from_slice(&rm[..nm]);
-                }
-                true
+                gyroscopic::inertial_accelerations(mis, ni, &m, &k, &c, &qd, &mut dx[ni..])
             }
             _ => {
                 let qd = &x[ni..2 * ni];
@@ -1858,7 +1929,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         let mut qd = vec![0.0; n];
         self.expand(&x_full_layout[..ni], &mut q, true);
         self.expand(&x_full_layout[ni..2 * ni], &mut qd, false);
-        let (r, w, _) = self.base_at(0.0f64);
+        let (r, w, ..) = self.base_at(0.0f64);
         let rr = M3(r.0.map(|row| row.map(|x| x.v)));
         let wv = V3(w.0.map(|x| x.v));
         let rates =
@@ -1917,7 +1988,7 @@ impl<M: ShipMotion> CompiledModel<M> {
 
     /// world_from_base at time t (f64).
     pub fn world_from_base(&self, t: f64) -> [[f64; 3]; 3] {
-        let (r, _, _) = self.base_at(t);
+        let (r, ..) = self.base_at(t);
         r.0.map(|row| row.map(|x| x.v))
     }
 
@@ -2006,7 +2077,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             u[i] = if drop[i] { 0.0 } else { qd[i] };
         }
         let drop_quadratic: &[bool] = if gyroscopic { &drop } else { &[] };
-        let (r, w, g) = self.base_at(t);
+        let (r, w, g, ..) = self.base_at(t);
         // The equations of every coordinate, with all forces and with some only: the
         // differences are the dampers' K, the applied forces' c and a finite servo's torque.
         let eval = |chain: &Chain| {
@@ -2071,6 +2142,12 @@ impl<M: ShipMotion> CompiledModel<M> {
             e.applied_power_w += (c_ns[i] - c_c[i]) * qd[i];
         }
         Some(e)
+    }
+
+    /// Whether `gyroscopic` fidelity runs the carried reduction here ([`crate::gyroscopic`]:
+    /// a rolling sea, and both precessional and inertial coordinates).
+    pub fn carries_gyros(&self) -> bool {
+        self.fidelity == Fidelity::Gyroscopic && self.carried
     }
 
     /// Index (full) of the coordinate with a role.

@@ -239,6 +239,9 @@ impl ShipMotion for ShipProgram {
     fn is_stationary(&self) -> bool {
         !self.moves()
     }
+    fn rolls(&self) -> bool {
+        !self.sea.is_calm()
+    }
     fn max_abs_latitude_rad(&self, t_end: f64) -> f64 {
         let mut m: f64 = 0.0;
         for s in &self.segments {

@@ -12,6 +12,12 @@
 //! themselves (`rhs_tape`, `jacobian_tape`) are held to the generic engine the tapes were
 //! recorded from (`rhs_engine`, `jacobian_engine`): the right-hand side to the bit, the
 //! Jacobian to 1e-13.
+//!
+//! Where `gyroscopic` fidelity carries the gyros (a rolling sea: `gyro_model`'s `gyroscopic`),
+//! the precession rates' time derivative is a central difference whose two points lie on the
+//! base's motion to first order only: there the two engines, which agree on consistent base
+//! inputs, may differ by the O(h²) the points stray, and the bound is 1e-9 (right-hand side)
+//! and 1e-8 (Jacobian); measured 5e-11 and 2e-10 at most.
 
 use gyro_model::{CompiledModel, Design, Effects, Fidelity, InitialCondition, Jet, ModelOptions};
 use gyro_model::{Moored, ShipMotion};
@@ -168,13 +174,24 @@ fn compare<M: ShipMotion>(
     (e_rhs, e_jac)
 }
 
+/// The agreement asked of a model (right-hand side, Jacobian): to round-off, or to the carried
+/// reduction's central difference (module doc).
+fn bounds<M: ShipMotion>(model: &CompiledModel<M>) -> (f64, f64) {
+    if model.carries_gyros() {
+        (1e-9, 1e-8)
+    } else {
+        (1e-12, 1e-10)
+    }
+}
+
 #[test]
 fn body_axes_engine_matches_the_reference_on_every_shipped_scene() {
     let mut rng = Lcg(7);
     for (label, _, sim) in crate::support::shipped_models() {
         let (e_rhs, e_jac) = compare(&label, &sim.model, &mut rng, 0.2, 1e-3);
-        assert!(e_rhs < 1e-12, "{label}: rhs differs by {e_rhs:e}");
-        assert!(e_jac < 1e-10, "{label}: Jacobian differs by {e_jac:e}");
+        let (rhs_bound, jac_bound) = bounds(&sim.model);
+        assert!(e_rhs < rhs_bound, "{label}: rhs differs by {e_rhs:e}");
+        assert!(e_jac < jac_bound, "{label}: Jacobian differs by {e_jac:e}");
     }
 }
 
@@ -401,9 +418,13 @@ fidelity = "{fidelity}"
                 0.5,
                 0.3,
             );
-            assert!(e_rhs < 1e-12, "{root}/{fidelity}: rhs differs by {e_rhs:e}");
+            let (rhs_bound, jac_bound) = bounds(&sim.model);
             assert!(
-                e_jac < 1e-10,
+                e_rhs < rhs_bound,
+                "{root}/{fidelity}: rhs differs by {e_rhs:e}"
+            );
+            assert!(
+                e_jac < jac_bound,
                 "{root}/{fidelity}: Jacobian differs by {e_jac:e}"
             );
         }

@@ -492,15 +492,15 @@ fn rolling_error(overrides: &[(&str, f64)], heading_deg: f64) -> f64 {
 /// is the whole error, within 20 %, "dépassant J₀/g"; at the design's 13.5 s it is a few times
 /// smaller (the text's "nettement insuffisante": not small either); on a cardinal heading the
 /// error vanishes. And the compensating weights (49): breaking A₁ + A₂ + 2ape/g = B₁ by δB₁ adds
-/// (48)'s first term −δB₁ s²(J₀/g)² sinΔ cosΔ/(2τ), within 20 %. Measured: 0.112 rad at
-/// synchronism against 0.118; 0.023 rad at 13.5 s and 0.014 at 60 s, where (48)'s terms give
-/// 0.002 + 0.0025: the rest is the `gyroscopic` fidelity's, whose precession equations count the
-/// gyro, which holds its tilt on the swinging pendulum, as rolling with the ship (docs/designs.md).
-/// `full` gives −0.0010 rad there (`gyrolab run compare-rolling-045 --design <60-s variant>
-/// --duration-s 14400 [--fidelity full]`, then `gyrolab analyze`: rolling error −0.02907
-/// gyroscopic, −0.04409 full, from −0.04311 at the start); 0.002 rad on 000° (not in (48), which
-/// keeps second-order terms in sinΔ cosΔ only); the first term 2.04e-3 against 1.78e-3. Both signs come
-/// out opposite to the printed (48), consistently: this chain's azimuth is West-positive.
+/// (48)'s first term −δB₁ s²(J₀/g)² sinΔ cosΔ/(2τ), within 20 %. `gyroscopic` fidelity, which on
+/// the sea carries the gyro on its swinging pendulum (docs/designs.md). Measured: 0.132 rad at
+/// synchronism against 0.118 (it does exceed the Anschütz's); 0.0098 rad at 13.5 s (Re H gives
+/// 0.0147), 0.0009 at 60 s (0.0021); 6e-4 rad on 000° (not in (48), which keeps second-order terms
+/// in sinΔ cosΔ only); the first term 2.00e-3 against 1.78e-3. Both signs come out opposite to the
+/// printed (48), consistently: this chain's azimuth is West-positive. The plain gyroscopic
+/// reduction, which counted the gyro as rolling with the pendulum, gave 0.023 rad at 13.5 s and
+/// 0.014 at 60 s; `full` gives 0.0010 at 60 s (`gyrolab run compare-rolling-045 --design <60-s
+/// variant> --duration-s 14400 [--fidelity full]`, then `gyrolab analyze`).
 #[test]
 fn rolling_error_follows_eq_48() {
     let probe = scene_from(&harbour(50.0, "", 0.1), &SceneOverrides::default());

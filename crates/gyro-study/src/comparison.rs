@@ -1040,18 +1040,18 @@ integrator per scene, not per design, so a design with very stiff parts (a many-
 x = kl², y = M and τ, and reaches 2/3 only for M ≫ x, τ. At `full` fidelity the twin-gyro gives 0.82 of the factor (61) \
 times the single frame's, and the growth of (61) with M within 5 % (`twin_gyro::rolling_error_follows_factor_61` in \
 gyro-sim's tests).\n\
-- The rolling scenes run `gyroscopic` fidelity, whose precession equations drop the kinetic energy's quadratic part \
-but keep its base-rate parts: a gyro carried on a swinging frame (the Sperry's and the Slough's gyro-ballistic \
-pendulum, the twin-gyro's spider) holds its tilt, and is counted there as rolling with the ship (docs/designs.md). \
-Where the gyros ride the sensitive element itself (Anschütz 1906, three-gyro) it does not matter. Rolling error on \
-045° net of the calm reading, `gyroscopic` against `full` (`gyrolab run scenes/compare-rolling-045.toml --design <d> \
-[--fidelity full]`, then `gyrolab analyze`; 2026-12-04): Anschütz 1906 −11.789° / −11.788°, three-gyro 0.183° / \
-0.186°, but Sperry 1911 1.307° / 0.556°, Slough −0.037° / 0.829°, twin-gyro −0.768° / −1.157°. At `full` the Sperry \
-keeps 8 % of its Anschütz-type error (|Re H(is)| of (48) is 12.5 %), below the 10 % by which its claim reads \
-*insufficient*. At `full` the twin's rolling error does not move with its boxes' pitch inertia (1.157° with 0.12, 0 \
-and 0.5 kg·m²); at `gyroscopic` it does (0.768°, 1.000°, 0.026°). `full` costs 15–90 times the wall time of \
-`gyroscopic` here (it follows the nutation: 1.3–2.1 M steps against 13–160 k), which is why the comparison does not \
-run it.\n\
+- The rolling scenes run `gyroscopic` fidelity, which on a rolling sea carries the gyros along the frames that \
+swing with the ship (the Sperry's and the Slough's gyro-ballistic pendulum, the twin-gyro's spider: docs/designs.md, \
+\"`gyroscopic` fidelity on a rolling sea\"). Rolling error on 045° net of the calm reading, `gyroscopic` against \
+`full` (`gyrolab run scenes/compare-rolling-045.toml --design <d> [--fidelity full]`, then `gyrolab analyze`; \
+2026-12-04): Anschütz 1906 −11.788° / −11.788°, three-gyro 0.1863° / 0.1864°, Sperry 1911 0.559° / 0.556°, Slough \
+0.829° / 0.829°, twin-gyro −1.157° / −1.157°. The plain reduction, which counted a carried gyro as rolling with its \
+frame, gave 1.307°, −0.037° and −0.768° for the last three (before 2026-12-04). `full` takes 1.3–2.1 M steps here \
+against 8–160 k (it follows the nutation).\n\
+- The Sperry's claim reads the 10-s swell of the standard set, where its 13.5-s pendulum leaves 8 % of the \
+Anschütz-type error ((48)'s Re H(is) gives 12.5 %). The text's argument is synchronism: a swell of the pendulum's \
+own period makes the term the whole Anschütz error (`sperry::rolling_error_follows_eq_48` in gyro-sim's tests \
+measures that). The standard set has no such swell, so at 10 s the claim's 10 % reads *not reproduced*.\n\
 - *Who errs least where* ranks by one key error per scene; the per-scene tables are the evidence.\n\n";
 
 /// The error a scene is judged by (None: not ranked).

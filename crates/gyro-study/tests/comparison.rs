@@ -330,7 +330,9 @@ fn the_comparison_reproduces_the_texts_claims_on_the_shipped_designs() {
     let v: BTreeMap<&str, Verdict> = c.claims.iter().map(|c| (c.id, c.verdict)).collect();
     // The claims the shipped designs reproduce.
     assert_eq!(v["anschutz-rolling-12deg"], Verdict::Reproduced);
-    assert_eq!(v["sperry-remedy-insufficient"], Verdict::Reproduced);
+    // At the standard 10-s swell the Sperry's 13.5-s pendulum removes 92 % (the comparison's
+    // limits): the text's insufficiency is synchronism, which the standard set does not hold.
+    assert_eq!(v["sperry-remedy-insufficient"], Verdict::NotReproduced);
     assert_eq!(v["slough-period-over-85min"], Verdict::Reproduced);
     assert_eq!(v["slough-backswing"], Verdict::Reproduced);
     let net = |design: &str, scene: &str| {
