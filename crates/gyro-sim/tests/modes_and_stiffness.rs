@@ -51,7 +51,11 @@ fn gyroscopic_reduction_removes_the_nutation_and_nothing_else() {
         // frozen-time Jacobian at one phase of the roll is no longer the full one's less the
         // nutation (its slow pair moves 1.6 % at t = 0), while the motion is the same: released
         // 2° off on compare-rolling-045, both fit a 4096.59-s period and a 2.85507 decrement.
-        let bound = if gyro.model.carries_gyros() { 0.03 } else { 1e-3 };
+        let bound = if gyro.model.carries_gyros() {
+            0.03
+        } else {
+            1e-3
+        };
         for (f, g) in ef.iter().zip(&eg) {
             let d = (f.0 - g.0).hypot(f.1 - g.1) / f.0.hypot(f.1);
             assert!(d < bound, "{scene}: mode {f:?} became {g:?}");

@@ -724,8 +724,13 @@ fn rolling_error(overrides: &[(&str, f64)]) -> (f64, ThreeGyro) {
 /// error against those terms (`ThreeGyro::rolling_error_terms_rad`, from each design's own
 /// numbers), term by term:
 /// - free surfaces made isotropic (E = F): the heel's term alone, within 6 % (measured 2.2 %);
-/// - the same with the lateral period 4 times longer (240 s): the heel's term there, ≈ 1/16 of
-///   it (the forced heel goes as (T_swell/T₁)²), within 6 % (4.0 %);
+/// - the same with the lateral period 4 times longer (240 s): the heel's term falls to ≈ 1/16
+///   (the forced heel goes as (T_swell/T₁)²), the error to 1/13: 0.0179° against 0.0135°, and
+///   `full` agrees (3.23966e-4 rad against `gyroscopic`'s 3.24042e-4 on compare-rolling-045 with
+///   that design). The 0.0044° the heel does not explain — a term of (51) that does not follow
+///   the heel, 2 % of the E = F error — is asserted below 3 % of it. (The plain gyroscopic
+///   reduction, before the gyros were carried at sea, gave 0.0140° here: a coincidence of its
+///   own error.)
 /// - the shipped design less the isotropic one: the free surfaces' term, within 10 % (5.8 %);
 /// - the shipped design: both, within 5 % (3.4 %; 0.18°, a 65th of the Anschütz 1906's 11.8°).
 #[test]
@@ -773,7 +778,13 @@ fn rolling_error_is_the_second_order_terms_of_51() {
     // The sign of ⟨J_x J_y⟩ is the heading's; the terms' signs relative to it are the test.
     let s = shipped.signum() * (heel + surface).signum();
     close(s * iso, heel_iso, 0.06, "heel, E = F");
-    close(s * iso_slow, heel_slow, 0.06, "heel, E = F, T₁ = 240 s");
+    assert!(
+        (s * iso_slow - heel_slow).abs() < 0.03 * heel_iso.abs()
+            && iso_slow.abs() < heel_iso.abs() / 10.0,
+        "heel, E = F, T₁ = 240 s: measured {:.5}° against {:.5}°",
+        iso_slow.to_degrees(),
+        heel_slow.to_degrees()
+    );
     close(s * (shipped - iso), surface, 0.10, "free surfaces");
     close(s * shipped, heel + surface, 0.05, "shipped");
 }
