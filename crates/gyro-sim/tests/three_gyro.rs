@@ -723,7 +723,7 @@ fn rolling_error(overrides: &[(&str, f64)]) -> (f64, ThreeGyro) {
 /// "l'influence du terme J_x J_x est faible par suite de son coefficient ϖ(E − F)". The engine's
 /// error against those terms (`ThreeGyro::rolling_error_terms_rad`, from each design's own
 /// numbers), term by term:
-/// - free surfaces made isotropic (E = F): the heel's term alone, within 6 % (measured 2.2 %);
+/// - free surfaces made isotropic (E = F): the heel's term alone, within 6 % (measured 0.6 %);
 /// - the same with the lateral period 4 times longer (240 s): the heel's term falls to ≈ 1/16
 ///   (the forced heel goes as (T_swell/T₁)²), the error to 1/13: 0.0179° against 0.0135°, and
 ///   `full` agrees (3.23966e-4 rad against `gyroscopic`'s 3.24042e-4 on compare-rolling-045 with
@@ -731,8 +731,8 @@ fn rolling_error(overrides: &[(&str, f64)]) -> (f64, ThreeGyro) {
 ///   the heel, 2 % of the E = F error — is asserted below 3 % of it. (The plain gyroscopic
 ///   reduction, before the gyros were carried at sea, gave 0.0140° here: a coincidence of its
 ///   own error.)
-/// - the shipped design less the isotropic one: the free surfaces' term, within 10 % (5.8 %);
-/// - the shipped design: both, within 5 % (3.4 %; 0.18°, a 65th of the Anschütz 1906's 11.8°).
+/// - the shipped design less the isotropic one: the free surfaces' term, within 10 % (6.0 %);
+/// - the shipped design: both, within 5 % (1.4 %; 0.18°, a 65th of the Anschütz 1906's 11.8°).
 #[test]
 fn rolling_error_is_the_second_order_terms_of_51() {
     let j0 = 10.035 * 4f64.to_radians().sin() * (TAU / 10.0) * (TAU / 10.0);

@@ -290,7 +290,7 @@ fn twin_rolling_two_thirds(entries: &[Entry], k: &Constants) -> Claim {
             let mut c = c;
             let ratio = e.abs() / single;
             c.measured = format!(
-                "{:.3}° against a single frame's {:.3}°: ratio {ratio:.3}, factor (61) {factor:.3} (`gyroscopic` fidelity; `full` gives 0.82 of the factor, see the limits)",
+                "{:.3}° against a single frame's {:.3}°: ratio {ratio:.3}, factor (61) {factor:.3} (`full` agrees to 0.1 %: the shortfall is the model's, see the limits)",
                 deg(e.abs()),
                 deg(single)
             );
@@ -1037,7 +1037,7 @@ real root of (55)) and the twin-gyro are still 0.064° and 0.052° from equilibr
 - The rolling scenes integrate with DOP853 (rtol 1e-7, atol 1e-6) like the shipped rolling scenes; a study sets one \
 integrator per scene, not per design, so a design with very stiff parts (a many-compartment tank) runs explicit there.\n\
 - The twin-gyro applies the compensation (54) that the factor (61) assumes; (61) is computed from the design's own \
-x = kl², y = M and τ, and reaches 2/3 only for M ≫ x, τ. At `full` fidelity the twin-gyro gives 0.82 of the factor (61) \
+x = kl², y = M and τ, and reaches 2/3 only for M ≫ x, τ. The twin-gyro gives 0.82 of the factor (61) \
 times the single frame's, and the growth of (61) with M within 5 % (`twin_gyro::rolling_error_follows_factor_61` in \
 gyro-sim's tests).\n\
 - The rolling scenes run `gyroscopic` fidelity, which on a rolling sea carries the gyros along the frames that \
@@ -1050,8 +1050,8 @@ frame, gave 1.307°, −0.037° and −0.768° for the last three (before 2026-1
 against 8–160 k (it follows the nutation).\n\
 - The Sperry's claim reads the 10-s swell of the standard set, where its 13.5-s pendulum leaves 8 % of the \
 Anschütz-type error ((48)'s Re H(is) gives 12.5 %). The text's argument is synchronism: a swell of the pendulum's \
-own period makes the term the whole Anschütz error (`sperry::rolling_error_follows_eq_48` in gyro-sim's tests \
-measures that). The standard set has no such swell, so at 10 s the claim's 10 % reads *not reproduced*.\n\
+own period makes the term exceed the Anschütz-type error, \"il dépasse cependant J₀/g\" \
+(`sperry::rolling_error_follows_eq_48` in gyro-sim's tests: 0.132 rad against 0.118). The standard set has no such swell, so at 10 s the claim's 10 % reads *not reproduced*.\n\
 - *Who errs least where* ranks by one key error per scene; the per-scene tables are the evidence.\n\n";
 
 /// The error a scene is judged by (None: not ranked).
