@@ -88,8 +88,9 @@ pub(crate) fn inertial_accelerations<T: Real, const N: usize>(
 
 /// Step of the central difference that gives a = dφ/dt along the motion. The recorded
 /// equations are smooth in t and q on the scale of the sea's seconds-long periods, so the
-/// truncation, ~(2πH/T)²/6, is below 1e-7 of a; H = 1e-4 s gives the same rolling errors to
-/// six digits on every carried design (compare-rolling-045).
+/// truncation, ~(2πH/T)²/6, is below 1e-7 of a. Checked once (2026-12-03, before the base
+/// carried ġ, R̈ and ω̈): H = 1e-4 s gave the twin-gyro's, the Sperry's and the three-gyro's
+/// rolling errors on compare-rolling-045 to six digits.
 pub(crate) const RATE_STEP_S: f64 = 1e-3;
 
 /// ẋ of the carried reduction (module doc) at q and the inertial rates `qd_m`: dx[..ni] the
@@ -139,20 +140,9 @@ pub(crate) fn carried_rates<T: Real, const N: usize>(
             kgg[a_r][a_c] = k[i][l];
         }
     }
-    let mut g = [[T::zero(); N]; N];
-    for (b, &j) in mis.iter().enumerate() {
-        let mut a = kgg;
-        let mut r = [T::zero(); N];
-        for (a_r, &i) in gi.iter().enumerate() {
-            r[a_r] = -k[i][j];
-        }
-        if !linalg::solve_nested(&mut a, &mut r, ng) {
-            return false;
-        }
-        for a_r in 0..ng {
-            g[a_r][b] = r[a_r];
-        }
-    }
+    let Some(g) = solve_columns(&kgg, ng, nm, |a_r, b| -k[gi[a_r]][mis[b]]) else {
+        return false;
+    };
     // a = φ_t + φ_q q̇ at fixed q̇_m (its change is G q̈_m): central difference along (1, q̇).
     let mut phi = [[T::zero(); N]; 2];
     for (side, s) in [RATE_STEP_S, -RATE_STEP_S].into_iter().enumerate() {
@@ -193,24 +183,16 @@ pub(crate) fn carried_rates<T: Real, const N: usize>(
             kgg[a_r][a_c] = k[i][l];
         }
     }
-    let mut x = [[T::zero(); N]; N];
-    for (b, &j) in mis.iter().enumerate() {
-        let mut a = kgg;
-        let mut rhs = [T::zero(); N];
-        for (a_r, &i) in gi.iter().enumerate() {
-            let mut s = m[i][j];
-            for (l_c, &l) in gi.iter().enumerate() {
-                s += m[i][l] * g[l_c][b];
-            }
-            rhs[a_r] = s;
+    let Some(x) = solve_columns(&kgg, ng, nm, |a_r, b| {
+        let (i, j) = (gi[a_r], mis[b]);
+        let mut s = m[i][j];
+        for (l_c, &l) in gi.iter().enumerate() {
+            s += m[i][l] * g[l_c][b];
         }
-        if !linalg::solve_nested(&mut a, &mut rhs, ng) {
-            return false;
-        }
-        for a_r in 0..ng {
-            x[a_r][b] = rhs[a_r];
-        }
-    }
+        s
+    }) else {
+        return false;
+    };
     let mut y = [T::zero(); N];
     for (a_r, &i) in gi.iter().enumerate() {
         let mut s = -r[i];
@@ -252,6 +234,31 @@ pub(crate) fn carried_rates<T: Real, const N: usize>(
     dx[..ni].copy_from_slice(&qd[..ni]);
     dx[ni..ni + nm].copy_from_slice(&rm[..nm]);
     true
+}
+
+/// Y (rows..ng, columns ..nm) solving A Y = B column by column, B's entry (row, column) given
+/// by `b`; None if A is singular.
+fn solve_columns<T: Real, const N: usize>(
+    a: &[[T; N]; N],
+    ng: usize,
+    nm: usize,
+    b: impl Fn(usize, usize) -> T,
+) -> Option<[[T; N]; N]> {
+    let mut y = [[T::zero(); N]; N];
+    for col in 0..nm {
+        let mut lu = *a;
+        let mut r = [T::zero(); N];
+        for (row, r) in r.iter_mut().enumerate().take(ng) {
+            *r = b(row, col);
+        }
+        if !linalg::solve_nested(&mut lu, &mut r, ng) {
+            return None;
+        }
+        for row in 0..ng {
+            y[row][col] = r[row];
+        }
+    }
+    Some(y)
 }
 
 /// The base `s` seconds on, to first order along its motion (R + sṘ, Ṙ + sR̈, ω + sω̇,

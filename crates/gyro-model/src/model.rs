@@ -13,7 +13,7 @@
 
 use crate::body_axes::{self, BodyAxesChain};
 use crate::design::{CoordinateRole, Design, Force, Root, SpinMode};
-use crate::dual::{Jet, M3, Real, V3};
+use crate::dual::{Jet, M3, Real, V3, rot_axis};
 use crate::earth::{BaseEffects, ShipMotion, apparent_gravity, base_motion};
 use crate::gyroscopic;
 use crate::linalg::{self, solve_in_place};
@@ -688,7 +688,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         let mut inputs = at.clone();
         if self.stationary.is_none() {
             inputs.resize(dim + BASE_INPUTS, 0.0);
-            base_scalars(&self.base_at(0.0), &mut inputs[dim..]);
+            base_scalars(&self.equation_base_at(0.0), &mut inputs[dim..]);
         }
         Some((fidelity, at, inputs))
     }
@@ -894,7 +894,10 @@ impl<M: ShipMotion> CompiledModel<M> {
         let dim = x.len();
         let mut inputs = [0.0; MAX_STATES + BASE_INPUTS];
         inputs[..dim].copy_from_slice(x);
-        base_scalars(&self.base_at(t), &mut inputs[dim..dim + BASE_INPUTS]);
+        base_scalars(
+            &self.equation_base_at(t),
+            &mut inputs[dim..dim + BASE_INPUTS],
+        );
         f(&inputs[..dim + BASE_INPUTS])
     }
 
@@ -993,12 +996,61 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
         // Only a rolling base turns fast enough for the precession equations' kept base-rate
         // terms (T₀, T₁) to matter against their dropped T₂ (docs/designs.md, "gyroscopic
-        // fidelity on a rolling sea"): elsewhere (a calm sea included) the plain reduction is
-        // kept, Lagrangian and four times cheaper.
+        // fidelity on a rolling sea"), and only where the sea turns a spin axis: elsewhere (a
+        // calm sea included) the plain reduction is kept, Lagrangian and four times cheaper.
         self.carried = self.effects.base.roll_pitch
             && self.motion.rolls()
             && !self.precessional_rows.is_empty()
-            && !self.inertial_rows.is_empty();
+            && !self.inertial_rows.is_empty()
+            && self.sea_turns_spin_axes();
+    }
+
+    /// Whether the sea can turn a rotor's spin axis at its own frequency: a ship-rooted chain
+    /// (the base rolls with the ship), or a hinge driven by an inertial coordinate on the way
+    /// from a rotor to the base that is not provably about that rotor's own axis (the same axis
+    /// with no moving hinge between). An Earth-rooted float that heels about its spin axis (the
+    /// Anschütz 1906) leaves the precession axes where the Earth and the track turn them, and
+    /// the carried reduction moves its rolling error by 1e-4 of itself at four times the cost.
+    fn sea_turns_spin_axes(&self) -> bool {
+        if self.chain.ship_root {
+            return true;
+        }
+        let ni = self.independent.len();
+        let inertial = |coordinate: usize| {
+            (0..ni).any(|col| !self.precessional[col] && self.servo_s[coordinate * ni + col] != 0.0)
+        };
+        let bodies = &self.design.bodies;
+        for (b, body) in bodies.iter().enumerate() {
+            let Some(rotor) = &body.rotor else { continue };
+            // The spin axis in the current body's frame while no moving hinge lies between.
+            let mut axis = Some(rotor.axis);
+            let mut cur = Some(b);
+            while let Some(c) = cur {
+                let body = &bodies[c];
+                if let Some(h) = &body.hinge {
+                    let swings = h.angle.coordinates().into_iter().any(inertial);
+                    let about_axis = axis.is_some_and(|a| {
+                        let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+                        (0..3).all(|k| k == h.axis || a[k].abs() <= 1e-12 * n)
+                    });
+                    if swings && !about_axis {
+                        return true;
+                    }
+                    if !h.angle.is_constant() {
+                        axis = None;
+                    } else if let Some(a) = axis {
+                        let r = rot_axis(h.axis, h.angle.constant);
+                        axis = Some(std::array::from_fn(|i| {
+                            (0..3).map(|k| r.0[i][k] * a[k]).sum()
+                        }));
+                    }
+                }
+                let j = body.joint_rotation;
+                axis = axis.map(|a| std::array::from_fn(|i| (0..3).map(|k| j[i][k] * a[k]).sum()));
+                cur = body.parent;
+            }
+        }
+        false
     }
 
     /// The gyroscopic layout of a full-layout state: q, the rates of the inertial coordinates,
@@ -1171,7 +1223,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         jac: &mut [f64],
     ) {
         let dim = self.dim_at(fidelity);
-        let base = self.base_at(Jet::<f64, D>::constant(t));
+        let base = self.equation_base_at(Jet::<f64, D>::constant(t));
         let mut xj = [Jet::<f64, D>::constant(0.0); MAX_STATES];
         let mut dxj = [Jet::<f64, D>::constant(0.0); MAX_STATES];
         let mut first = 0;
@@ -1223,7 +1275,18 @@ impl<M: ShipMotion> CompiledModel<M> {
         }
     }
 
+    /// The base at t without the rates only the carried reduction reads (ġ, R̈, ω̈ are zero):
+    /// what poses, gravity, energies and the statics need.
     fn base_at<T: Real>(&self, t: T) -> Base<T> {
+        self.base_with(t, false)
+    }
+
+    /// The base at t as the equations read it: with ġ, R̈ and ω̈ when the model is carried.
+    fn equation_base_at<T: Real>(&self, t: T) -> Base<T> {
+        self.base_with(t, self.carried)
+    }
+
+    fn base_with<T: Real>(&self, t: T, carried: bool) -> Base<T> {
         match &self.stationary {
             Some(s) => {
                 let lift = |x: Jet<f64, 1>| Jet {
@@ -1247,7 +1310,7 @@ impl<M: ShipMotion> CompiledModel<M> {
                 let mut g_dot = [T::zero(); 3];
                 let mut r_dd = [[T::zero(); 3]; 3];
                 let mut w_dd = [T::zero(); 3];
-                if self.carried {
+                if carried {
                     // Central difference over ±1 ms: the sea's periods are seconds, so the
                     // truncation is ~(2π·1e-3/T)²/6 < 1e-7 of ġ and the round-off ~1e-12 m/s³.
                     const H: f64 = 1e-3;
@@ -1347,7 +1410,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         let mut k = [T::zero(); MX * MX];
         let mut c = [T::zero(); MX];
         let q = &x[..ni];
-        let base = self.base_at(t);
+        let base = self.equation_base_at(t);
         match fidelity {
             Fidelity::Gyroscopic if self.carried => {
                 let eval = |drop: bool,
@@ -1481,7 +1544,7 @@ impl<M: ShipMotion> CompiledModel<M> {
         x: &[T],
         dx: &mut [T],
     ) -> bool {
-        let base = self.base_at(t);
+        let base = self.equation_base_at(t);
         macro_rules! go {
             ($n:literal, $d:literal) => {
                 self.rhs_n::<T, $n>(fidelity, &base, x, dx)

@@ -2,6 +2,7 @@
 //! (§35), the quadrantal error under rolling (§40), and "absent effects cost nothing".
 
 use crate::support;
+use gyro_model::Fidelity;
 use gyro_model::constants::{
     EARTH_RADIUS_M, EARTH_RATE_RAD_PER_S, KNOT_IN_M_PER_S, STANDARD_GRAVITY_M_PER_S2,
 };
@@ -130,10 +131,15 @@ fn schuler_tuned_compass_lands_on_the_new_equilibrium() {
 }
 
 fn rolling_mean_error(scene: &str) -> (f64, f64) {
+    rolling_mean_error_at(scene, None)
+}
+
+fn rolling_mean_error_at(scene: &str, fidelity: Option<Fidelity>) -> (f64, f64) {
     // 4 h: the error builds up with the compass's own response (decay ≈ 25 min); the mean is
     // taken over the last 2 h (whole roll periods).
     let ov = SceneOverrides {
         duration_s: Some(4.0 * 3600.0),
+        fidelity,
         ..Default::default()
     };
     let sc = scene_from(&scene_text(scene), &ov);
@@ -188,6 +194,42 @@ fn rolling_gives_the_quadrantal_error_on_intercardinal_headings_only() {
         "cardinal mean error {:.4}°",
         mean0.to_degrees()
     );
+}
+
+/// `gyroscopic` carries the gyros at sea only where the sea turns a spin axis (gyro-model's
+/// `gyroscopic` module): the Anschütz 1906's float heels about its own spin axis, so it keeps the
+/// plain reduction, a quarter of the cost, and must then agree with `full` to the gyroscopic
+/// model's error; the ship-rooted designs and the three-gyro (whose heel swings its side gyros)
+/// are carried.
+#[test]
+fn only_a_sea_that_turns_a_spin_axis_carries_the_gyros() {
+    let (plain, _) = rolling_mean_error_at("rolling-intercardinal", None);
+    let (full, _) = rolling_mean_error_at("rolling-intercardinal", Some(Fidelity::Full));
+    println!(
+        "Anschütz 1906, rolling-intercardinal: gyroscopic (plain) {plain:.6e}, full {full:.6e}"
+    );
+    assert!(
+        (plain / full - 1.0).abs() < 1e-3,
+        "plain gyroscopic {plain} vs full {full}"
+    );
+    for (design, carried) in [
+        ("anschutz-1906", false),
+        ("sperry-1911", true),
+        ("slough", true),
+        ("sperry-twin-1918", true),
+        ("anschutz-three-gyro-1912", true),
+    ] {
+        let ov = SceneOverrides {
+            design: Some(design.into()),
+            ..Default::default()
+        };
+        let sc = scene_from(&scene_text("compare-rolling-045"), &ov);
+        let sim = gyro_sim::Simulation::new(&sc).expect("compiles");
+        assert_eq!(sim.model.carries_gyros(), carried, "{design}");
+        let calm = scene_from(&scene_text("compare-harbour-50n"), &ov);
+        let sim = gyro_sim::Simulation::new(&calm).expect("compiles");
+        assert!(!sim.model.carries_gyros(), "{design} in harbour");
+    }
 }
 
 #[test]
