@@ -646,27 +646,20 @@ pub fn constants(plan: &Plan, entries: &[Entry]) -> Constants {
     {
         k.twin_periods_50n_s = Some(th.periods());
     }
+    // The error the Sperry's pendulum moment (Ql + ϖb) would give as an Anschütz on a swell.
+    let anschutz_type = |s: &gyro_sim::Scene, i: u64, th: &Sperry1911| {
+        let (j0, h) = sea(s, i);
+        rolling_error_magnitude_rad(j0, h, th.bail_moment + th.pendulum_moment, th.tau())
+    };
     if let Some((s, i)) = scene_of(ROLLING_045_13S, SPERRY_1911)
         && let Some(th) = Sperry1911::from_design(&s.design, s.start_latitude_rad)
     {
-        let (j0, h) = sea(&s, i);
-        k.sperry_anschutz_type_error_13s_rad = Some(rolling_error_magnitude_rad(
-            j0,
-            h,
-            th.bail_moment + th.pendulum_moment,
-            th.tau(),
-        ));
+        k.sperry_anschutz_type_error_13s_rad = Some(anschutz_type(&s, i, &th));
     }
     if let Some((s, i)) = scene_of(ROLLING_045, SPERRY_1911)
         && let Some(th) = Sperry1911::from_design(&s.design, s.start_latitude_rad)
     {
-        let (j0, h) = sea(&s, i);
-        k.sperry_anschutz_type_error_rad = Some(rolling_error_magnitude_rad(
-            j0,
-            h,
-            th.bail_moment + th.pendulum_moment,
-            th.tau(),
-        ));
+        k.sperry_anschutz_type_error_rad = Some(anschutz_type(&s, i, &th));
         // H(iσ) = (k + ik₁σ)/(k − Mσ² + ik₁σ), M = j²ω²/ϖb.
         let sigma = std::f64::consts::TAU / s.program.sea.roll_period_s;
         let m = th.small_spin_momentum * th.small_spin_momentum / th.pendulum_moment;
