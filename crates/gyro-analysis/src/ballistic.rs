@@ -96,11 +96,17 @@ pub struct BallisticOptions {
     pub band_rad: f64,
     /// Relative settling band, a fraction of the peak (default 0.1); the wider of the two is used.
     pub band_fraction: f64,
-    /// The back-swing is measured from this long after the manoeuvre's end (default 120 s: the
-    /// text's t₂, "une ou deux minutes" after the perturbation, once a liquid ballistic has
-    /// followed it) …
+    /// The back-swing is read this long after the manoeuvre's end (default 60 s): Beghin §70's
+    /// ζ′ "à la fin de la perturbation", which for the Slough lasts "une ou deux minutes" more,
+    /// until its mercury has followed (t₂). In the Hermione trial the mercury's sloshing swings
+    /// the Slough's card at up to 4e-5 rad/s in the first 30 s, against 1.3e-5 once it has
+    /// followed; the three-gyro's oil has no such transient.
     pub backswing_delay_s: f64,
-    /// … over this window (default 360 s, short against any compass period: the initial rate).
+    /// … as the rate at its start of a least-squares parabola over this window (default 180 s;
+    /// on a rate decaying as e^(−t/600 s) it reads 0.7 % low).
+    /// The rate changes within minutes (the card starts off its new equilibrium): the Slough's
+    /// falls from 1.3e-5 rad/s at 1 min to 0.36e-5 at 10 min, so a slope over minutes would read
+    /// the rate of the window's middle, well under the text's ζ′.
     pub backswing_window_s: f64,
     pub fit: FitOptions,
 }
@@ -110,8 +116,8 @@ impl Default for BallisticOptions {
         Self {
             band_rad: 0.1_f64.to_radians(),
             band_fraction: 0.1,
-            backswing_delay_s: 120.0,
-            backswing_window_s: 360.0,
+            backswing_delay_s: 60.0,
+            backswing_window_s: 180.0,
             fit: FitOptions::default(),
         }
     }
@@ -159,11 +165,12 @@ pub struct BallisticDeviation {
     /// Deviation from the new equilibrium just after the manoeuvre: (T_S²/T² − 1)·Δζ_eq.
     pub expected_peak_deviation_rad: Option<f64>,
     /// How far the card has swung from its old equilibrium when the back-swing window opens
-    /// (error at end + `backswing_delay_s` minus the equilibrium before), rad.
+    /// (the error there minus the equilibrium before), rad.
     pub swing_rad: Option<f64>,
-    /// The card's rate over the back-swing window (least-squares slope), rad/s: Beghin §70's ζ′
-    /// after a speed change, of the opposite sign to `swing_rad` when the damper drives the card
-    /// back at once (the Slough's mercury, the three-gyro's oil).
+    /// The card's rate `backswing_delay_s` after the manoeuvre's end (a least-squares parabola's
+    /// over `backswing_window_s`), rad/s: Beghin §70's ζ′ after a speed change, of the opposite
+    /// sign to `swing_rad` when the damper drives the card back (the Slough's mercury, the
+    /// three-gyro's oil).
     pub backswing_rate_rad_per_s: Option<f64>,
 }
 
@@ -196,6 +203,61 @@ pub fn slope(t: &[f64], x: &[f64], a: f64, b: f64) -> Option<f64> {
         (sxy + (ti - mt) * (xi - mx), sxx + (ti - mt) * (ti - mt))
     });
     (sxx > 0.0).then(|| sxy / sxx)
+}
+
+/// The rate at `a` of the least-squares parabola through (t, x) over [a, b] (finite samples
+/// only; `None` with fewer than 4 or a degenerate spread): a rate at the window's start, where a
+/// slope would give the rate at its middle.
+pub fn rate_at_start(t: &[f64], x: &[f64], a: f64, b: f64) -> Option<f64> {
+    let w = b - a;
+    if w.is_nan() || w <= 0.0 {
+        return None;
+    }
+    // Normal equations of x = c₀ + c₁u + c₂u², u = (t − a)/w ∈ [0, 1] (well conditioned):
+    // sums of u^k (k ≤ 4) and of u^k x (k ≤ 2), solved for c₁ by Cramer's rule.
+    let (i0, i1) = (
+        t.partition_point(|v| *v < a),
+        t.partition_point(|v| *v <= b),
+    );
+    let (mut su, mut sx) = ([0.0; 5], [0.0; 3]);
+    let mut count = 0;
+    for (ti, xi) in t[i0..i1].iter().zip(&x[i0..i1]) {
+        if !xi.is_finite() {
+            continue;
+        }
+        let u = (ti - a) / w;
+        let (u2, u3) = (u * u, u * u * u);
+        for (s, p) in su.iter_mut().zip([1.0, u, u2, u3, u2 * u2]) {
+            *s += p;
+        }
+        for (s, p) in sx.iter_mut().zip([1.0, u, u2]) {
+            *s += p * xi;
+        }
+        count += 1;
+    }
+    if count < 4 {
+        return None;
+    }
+    let det3 = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let m = [
+        [su[0], su[1], su[2]],
+        [su[1], su[2], su[3]],
+        [su[2], su[3], su[4]],
+    ];
+    let d = det3(m);
+    if d.is_nan() || d.abs() <= 1e-12 * su[0].powi(3) {
+        return None;
+    }
+    let m1 = [
+        [su[0], sx[0], su[2]],
+        [su[1], sx[1], su[3]],
+        [su[2], sx[2], su[4]],
+    ];
+    Some(det3(m1) / d / w)
 }
 
 /// The ballistic deviation after every manoeuvre of (t, error): `events` as read by
@@ -314,7 +376,7 @@ fn one_deviation(
     d.equilibrium_before_rad = before.value.map(|v| v.value);
     let w0 = end.time_s + opts.backswing_delay_s;
     let w1 = (w0 + opts.backswing_window_s).min(next_start);
-    if let Some(rate) = slope(t, error, w0, w1) {
+    if let Some(rate) = rate_at_start(t, error, w0, w1) {
         let (i0, _) = range(w0, w1);
         d.backswing_rate_rad_per_s = Some(rate);
         d.swing_rad = d.equilibrium_before_rad.map(|b| error[i0] - b);
@@ -366,4 +428,71 @@ fn one_deviation(
         None => format!("does not settle within {band:.3e} rad before {next_start:.0} s"),
     };
     d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn events(start: f64, end: f64) -> Vec<ManoeuvreEvent> {
+        [(start, event_fields::START), (end, event_fields::END)]
+            .into_iter()
+            .map(|(time_s, phase)| ManoeuvreEvent {
+                time_s,
+                phase: phase.to_owned(),
+                manoeuvre: "speed_change".to_owned(),
+                segment: 1,
+                description: String::new(),
+                speed_before_m_per_s: 5.0,
+                speed_after_m_per_s: 0.0,
+                heading_before_rad: 0.0,
+                heading_after_rad: 0.0,
+                duration_s: end - start,
+            })
+            .collect()
+    }
+
+    /// A card at rest swings by −s during a 60-s manoeuvre ending at 3660 s; then a liquid
+    /// sloshes (a 30-s oscillation of the card dying in seconds, its rate up to 3r₀) while the
+    /// damper drives the card back at r₀ e^(−t/τ). The back-swing read is the rate 60 s after
+    /// the end, r₀ e^(−60/τ), within 1 %; a slope over 2–8 min would read 0.6 r₀.
+    #[test]
+    fn the_backswing_is_the_rate_once_the_liquid_has_followed() {
+        let (end, s, r0, tau) = (3660.0, 0.012, 1.25e-5, 600.0);
+        let slosh = 3.0 * r0 * 30.0 / std::f64::consts::TAU;
+        let card = |ti: f64| {
+            if ti <= 3600.0 {
+                0.0
+            } else if ti <= end {
+                -s * (ti - 3600.0) / 60.0
+            } else {
+                let u = ti - end;
+                -s + r0 * tau * (1.0 - (-u / tau).exp())
+                    + slosh * (-u / 5.0).exp() * (std::f64::consts::TAU * u / 30.0).sin()
+            }
+        };
+        let t: Vec<f64> = (0..=4 * 14_400).map(|i| f64::from(i) * 0.25).collect();
+        let x: Vec<f64> = t.iter().map(|&ti| card(ti)).collect();
+        let d = ballistic_deviations(
+            &t,
+            &x,
+            &events(3600.0, end),
+            None,
+            &BallisticConstants::default(),
+            Some(6000.0),
+            &BallisticOptions::default(),
+        );
+        let rate = d[0].backswing_rate_rad_per_s.expect("a back-swing");
+        let expect = r0 * (-60.0 / tau).exp();
+        assert!((rate / expect - 1.0).abs() < 0.01, "{rate} vs {expect}");
+        // The swing is read where the back-swing is, from the steady value of the first hour.
+        let sw = d[0].swing_rad.expect("a swing");
+        let at_t2 = -s + r0 * tau * (1.0 - (-60.0 / tau).exp());
+        assert!((sw - at_t2).abs() < 1e-6, "swing {sw} vs {at_t2}");
+        let old = slope(&t, &x, end + 120.0, end + 480.0).expect("slope");
+        assert!(old < 0.7 * r0, "2–8 min slope {old}");
+        // Within the slosh the instantaneous rate is far off: what the delay is for.
+        let early = rate_at_start(&t, &x, end + 5.0, end + 20.0).expect("rate");
+        assert!((early / r0 - 1.0).abs() > 0.5, "slosh rate {early}");
+    }
 }

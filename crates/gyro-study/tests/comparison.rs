@@ -55,6 +55,7 @@ fn constants() -> Constants {
         three_gyro_rolling_terms_rad: Some((0.012f64.to_radians(), -0.002f64.to_radians())),
         hermione_delta_v_m_per_s: Some(DV),
         hermione_latitude_rad: Some(LAT.to_radians()),
+        three_gyro_backswing_77_rad_per_s: Some(1e-5),
     }
 }
 
@@ -407,6 +408,18 @@ fn the_comparison_reproduces_the_texts_claims_on_the_shipped_designs() {
         "three-gyro-period-70min",
     ] {
         assert_eq!(v[id] == Verdict::NotEvaluated, !three, "{id}");
+    }
+    // The three-gyro's oil drives the card back at the rate (77) gives from its own numbers
+    // "in the first minutes", while the tank's levels are still near those of (76): read 1 min
+    // after the stop, 0.84 of it (2026-12-04; the rate falls ≈ 11 % in that minute).
+    if three {
+        let over_77 = c
+            .claims
+            .iter()
+            .find(|c| c.id == "three-gyro-backswing-twice-slough")
+            .and_then(|c| c.values.get("rate_over_77").copied())
+            .expect("the three-gyro's back-swing against (77)");
+        assert!((over_77 - 1.0).abs() < 0.2, "back-swing / (77) = {over_77}");
     }
     // The report names every design; the scorecard draws every one (no recordings: no curves).
     let plots = comparison::write_plots(&c, &out, &out.join("figures")).expect("plots");
