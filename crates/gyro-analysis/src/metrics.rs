@@ -109,8 +109,8 @@ pub struct RunMetrics {
     /// The longest settle time over the manoeuvres (None if one never settles).
     pub ballistic_settle_s: Option<f64>,
     /// Of the manoeuvre with the largest peak: how far the card had swung from its old
-    /// equilibrium 2 min after the end, and its rate over the next 6 min (Beghin §70's
-    /// back-swing: of the opposite sign when the damper drives the card back at once).
+    /// equilibrium 1 min after the end, and its rate there (Beghin §70's back-swing, of the
+    /// opposite sign when the damper drives the card back; `ballistic::BallisticOptions`).
     pub ballistic_swing_rad: Option<f64>,
     pub ballistic_backswing_rate_rad_per_s: Option<f64>,
     pub rolling_error_rad: Option<f64>,
