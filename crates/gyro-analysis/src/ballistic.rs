@@ -18,6 +18,7 @@ use crate::fit::{Estimate, FitOptions, Quality, fit_damped_sinusoid};
 use crate::load::{EVENTS_TOPIC, Run};
 use crate::steady::{SteadyOptions, steady_error};
 use gyro_mcap::contract::events as event_fields;
+use gyro_model::linalg::solve_in_place;
 
 // Physical constants and the elementary speed error live in one place, gyro-model.
 pub use gyro_model::constants::{EARTH_RADIUS_M, EARTH_RATE_RAD_PER_S, schuler_period_s};
@@ -206,58 +207,35 @@ pub fn slope(t: &[f64], x: &[f64], a: f64, b: f64) -> Option<f64> {
 }
 
 /// The rate at `a` of the least-squares parabola through (t, x) over [a, b] (finite samples
-/// only; `None` with fewer than 4 or a degenerate spread): a rate at the window's start, where a
+/// only; `None` with fewer than 4 or a singular fit): a rate at the window's start, where a
 /// slope would give the rate at its middle.
 pub fn rate_at_start(t: &[f64], x: &[f64], a: f64, b: f64) -> Option<f64> {
     let w = b - a;
     if w.is_nan() || w <= 0.0 {
         return None;
     }
-    // Normal equations of x = c₀ + c₁u + c₂u², u = (t − a)/w ∈ [0, 1] (well conditioned):
-    // sums of u^k (k ≤ 4) and of u^k x (k ≤ 2), solved for c₁ by Cramer's rule.
+    // Normal equations of x = c₀ + c₁u + c₂u², u = (t − a)/w ∈ [0, 1] (well conditioned).
     let (i0, i1) = (
         t.partition_point(|v| *v < a),
         t.partition_point(|v| *v <= b),
     );
-    let (mut su, mut sx) = ([0.0; 5], [0.0; 3]);
+    let (mut m, mut c) = ([0.0; 9], [0.0; 3]);
     let mut count = 0;
     for (ti, xi) in t[i0..i1].iter().zip(&x[i0..i1]) {
         if !xi.is_finite() {
             continue;
         }
         let u = (ti - a) / w;
-        let (u2, u3) = (u * u, u * u * u);
-        for (s, p) in su.iter_mut().zip([1.0, u, u2, u3, u2 * u2]) {
-            *s += p;
-        }
-        for (s, p) in sx.iter_mut().zip([1.0, u, u2]) {
-            *s += p * xi;
+        let p = [1.0, u, u * u];
+        for (i, pi) in p.iter().enumerate() {
+            for (j, pj) in p.iter().enumerate() {
+                m[3 * i + j] += pi * pj;
+            }
+            c[i] += pi * xi;
         }
         count += 1;
     }
-    if count < 4 {
-        return None;
-    }
-    let det3 = |m: [[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let m = [
-        [su[0], su[1], su[2]],
-        [su[1], su[2], su[3]],
-        [su[2], su[3], su[4]],
-    ];
-    let d = det3(m);
-    if d.is_nan() || d.abs() <= 1e-12 * su[0].powi(3) {
-        return None;
-    }
-    let m1 = [
-        [su[0], sx[0], su[2]],
-        [su[1], sx[1], su[3]],
-        [su[2], sx[2], su[4]],
-    ];
-    Some(det3(m1) / d / w)
+    (count >= 4 && solve_in_place(&mut m, &mut c, 3)).then(|| c[1] / w)
 }
 
 /// The ballistic deviation after every manoeuvre of (t, error): `events` as read by

@@ -388,14 +388,16 @@ fn the_comparison_reproduces_the_texts_claims_on_the_shipped_designs() {
             "{d}: speed error {shift} vs {expect}"
         );
     }
+    // A number a claim records beside its verdict.
+    let value = |id: &str, key: &str| {
+        c.claims
+            .iter()
+            .find(|c| c.id == id)
+            .and_then(|c| c.values.get(key).copied())
+    };
     // The twin-gyro's claim is evaluated against the factor (61) of its own numbers.
     assert_ne!(v["twin-rolling-two-thirds"], Verdict::NotEvaluated);
-    let factor = c
-        .claims
-        .iter()
-        .find(|c| c.id == "twin-rolling-two-thirds")
-        .and_then(|c| c.values.get("factor_61").copied())
-        .expect("factor (61)");
+    let factor = value("twin-rolling-two-thirds", "factor_61").expect("factor (61)");
     assert!(
         factor > 0.0 && factor <= 2.0 / 3.0,
         "factor (61) = {factor}"
@@ -413,11 +415,7 @@ fn the_comparison_reproduces_the_texts_claims_on_the_shipped_designs() {
     // "in the first minutes", while the tank's levels are still near those of (76): read 1 min
     // after the stop, 0.84 of it (2026-12-04; the rate falls ≈ 11 % in that minute).
     if three {
-        let over_77 = c
-            .claims
-            .iter()
-            .find(|c| c.id == "three-gyro-backswing-twice-slough")
-            .and_then(|c| c.values.get("rate_over_77").copied())
+        let over_77 = value("three-gyro-backswing-twice-slough", "rate_over_77")
             .expect("the three-gyro's back-swing against (77)");
         assert!((over_77 - 1.0).abs() < 0.2, "back-swing / (77) = {over_77}");
     }
