@@ -428,7 +428,7 @@ fn slough_backswing(entries: &[Entry], k: &Constants) -> Claim {
         "slough-backswing",
         "Slough, Hermione trial: after a speed change heading North the mercury drives the card back at once, against its deviation, at ζ′ = −8μπ²/(T²ε cos L)·δv/g (§70, L3116–3123)",
         &[SLOUGH],
-        "back-swing rate (the largest against the swing in the 10 min after the change: \"à la fin de la perturbation\", once the mercury has followed) opposite to the swing, its magnitude within 15 % of the formula with T and μ fitted on the Slough's 50°N release",
+        "back-swing rate (1 min after the change: \"à la fin de la perturbation\", once the mercury has followed) opposite to the swing, its magnitude within 15 % of the formula with T and μ fitted on the Slough's 50°N release",
     );
     match backswing(entries, SLOUGH, k) {
         Some((rate, swing, t, mu, norm)) => {
