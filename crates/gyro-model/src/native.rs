@@ -8,8 +8,9 @@
 //! constants: the same IEEE operations on the same operands in the same order as the tape (no
 //! fused multiply-add: Rust never contracts `a * b + c`), so its results equal the tape's, and
 //! the engine's, to the bit. A design of the user's own, or a scene whose numbers fold
-//! differently (a zero latitude, say), has no match and runs the interpreter: slower, the same
-//! results.
+//! differently (a zero latitude, say) or happen to equal one another (constants are shared by
+//! value: a twin-gyro with gimbal friction 6 N·m·s/rad on compare-rolling-045 is one), has no
+//! match and runs the interpreter: slower (there 8×), the same results.
 //!
 //! `generated.rs` is output, not source: regenerate it after a change to the engine or to a
 //! shipped design with

@@ -512,7 +512,8 @@ fn fusable_products(
         .collect()
 }
 
-/// Drops dead nodes and numbers slots: constants, inputs, then operations in recording order.
+/// Drops dead nodes and numbers slots: constants (by first use), inputs, then operations in
+/// recording order.
 fn compact(rec: Recorder, n_inputs: usize, outputs: &[Tr]) -> Tape {
     let n = rec.ops.len();
     let mut live = vec![false; n];
@@ -559,13 +560,42 @@ fn compact(rec: Recorder, n_inputs: usize, outputs: &[Tr]) -> Tape {
         }
     }
     let fused = fusable_products(&rec, &live, &solve_live, outputs);
+    // Constants are numbered by their first use, not by when they were recorded: constants are
+    // shared by value, so a constant's recording order depends on whether an equal value was
+    // recorded earlier (even by dead work), and with it the shape. Numbered by use, two
+    // recordings of the same arithmetic have one shape whatever the coincidences before it.
     let mut slot = vec![u32::MAX; n];
     let mut consts = Vec::new();
-    for id in 0..n {
-        if let (true, Op::Const(c)) = (live[id], rec.ops[id]) {
-            slot[id] = consts.len() as u32;
+    let mut number = |x: u32, slot: &mut [u32]| {
+        if let Op::Const(c) = rec.ops[x as usize]
+            && slot[x as usize] == u32::MAX
+        {
+            slot[x as usize] = consts.len() as u32;
             consts.push(c);
         }
+    };
+    let mut solve_seen = vec![false; rec.solves.len()];
+    for id in (0..n).filter(|&id| live[id]) {
+        match rec.ops[id] {
+            Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
+                number(a, &mut slot);
+                number(b, &mut slot);
+            }
+            Op::Neg(a) | Op::Sin(a) | Op::Cos(a) | Op::Sqrt(a) | Op::Asin(a) => {
+                number(a, &mut slot)
+            }
+            Op::SolveOut(sv, _) if !solve_seen[sv as usize] => {
+                solve_seen[sv as usize] = true;
+                let spec = &rec.solves[sv as usize];
+                for &x in spec.a.iter().chain(&spec.b) {
+                    number(x, &mut slot);
+                }
+            }
+            _ => {}
+        }
+    }
+    for o in outputs {
+        number(o.id, &mut slot);
     }
     let base = consts.len();
     for id in 0..n {
