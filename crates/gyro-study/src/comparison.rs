@@ -298,7 +298,7 @@ fn twin_rolling_two_thirds(entries: &[Entry], k: &Constants) -> Claim {
             let mut c = c;
             let ratio = e.abs() / single;
             c.measured = format!(
-                "{:.3}° against a single frame's {:.3}°: ratio {ratio:.3}, factor (61) {factor:.3} (`full` agrees to 0.1 %: the shortfall is the gimbals' friction, see the limits)",
+                "{:.3}° against a single frame's {:.3}°: ratio {ratio:.3}, factor (61) {factor:.3} (`full` agrees to 0.1 %; (61) assumes frictionless gimbals, see the limits)",
                 deg(e.abs()),
                 deg(single)
             );
@@ -1094,20 +1094,23 @@ real root of (55)) and the twin-gyro are still 0.064° and 0.052° from equilibr
 - The rolling scenes integrate with DOP853 (rtol 1e-7, atol 1e-6) like the shipped rolling scenes; a study sets one \
 integrator per scene, not per design, so a design with very stiff parts (a many-compartment tank) runs explicit there.\n\
 - The twin-gyro applies the compensation (54) that the factor (61) assumes; (61) is computed from the design's own \
-x = kl², y = M and τ, and reaches 2/3 only for M ≫ x, τ. The twin-gyro gives 0.82 of the factor (61) \
-times the single frame's, and the growth of (61) with M within 5 % (`twin_gyro::rolling_error_follows_factor_61` in \
-gyro-sim's tests). The 20 % is the gimbals' friction, of which (61) holds no term (the spider's viscous m, n): the design damps the \
-spider's ≈ 1-s pendulum at a ratio ≈ 0.5 (as the Sperry 1911's), and the ship's roll drags the spider through it, an \
-error opposing the quadrantal one that grows against it as the swell lengthens (0.50 and −0.74 of (61)'s on 20- and \
-40-s swells of the same 4°). With the gimbals frictionless the twin-gyro gives 1.04 × (61), and 0.98 with the wire \
-100 τ₀ stiff (asserted within 10 % by the same test).\n\
+x = kl², y = M and τ, and reaches 2/3 only for M ≫ x, τ. The twin-gyro gives 0.99 of the factor (61) \
+times the single frame's, 0.94 with the wire 100 τ₀ stiff, and the growth of (61) with M within 6 % \
+(`twin_gyro::rolling_error_follows_factor_61` in gyro-sim's tests). (61) holds no term in the gimbals' friction (the \
+spider's viscous m, n), and the ship's roll drags the spider through it, an error opposing the quadrantal one that \
+grows against it as the swell lengthens. With the Sperry 1911's friction (15 N·m·s/rad, the spider's ≈ 1-s pendulum \
+damped at ≈ 0.5), which the twin-gyro carried until 2026-12-05, it gave 0.82 of (61) (0.50 and −0.74 on 20- and \
+40-s swells of the same 4°); frictionless, 1.04. The shipped twin-gyro takes 7 N·m·s/rad (ratio ≈ 0.23; \
+the 20-kn stop then takes 4096 steps instead of 3375, the spider ringing longer). The Sperry 1911 and the Slough keep \
+the 15: frictionless, their rolling errors on 045° (net of the calm reading) would be 4 % smaller and 23 % larger; no \
+claim of theirs rests on that size.\n\
 - The rolling scenes run `gyroscopic` fidelity, which on a rolling sea carries the gyros along the frames that \
 swing with the sea (the Sperry's and the Slough's gyro-ballistic pendulum, the twin-gyro's spider, the three-gyro's \
 side gyros on its heeling float; the Anschütz 1906's float heels about its own spin axis, so it keeps the plain \
 reduction: docs/designs.md, \"`gyroscopic` fidelity on a rolling sea\"). Rolling error on 045° net of the calm reading, `gyroscopic` against \
 `full` (`gyrolab run scenes/compare-rolling-045.toml --design <d> [--fidelity full]`, then `gyrolab analyze`; \
 2026-12-04): Anschütz 1906 −11.789° / −11.788°, three-gyro 0.1863° / 0.1864°, Sperry 1911 0.559° / 0.556°, Slough \
-0.829° / 0.829°, twin-gyro −1.157° / −1.157°. The plain reduction, which counted a carried gyro as rolling with its \
+0.829° / 0.829°, twin-gyro −1.396° / −1.396° (its gimbal friction since 2026-12-05; −1.157° / −1.157° with the Sperry's). The plain reduction, which counted a carried gyro as rolling with its \
 frame, gave 1.307°, −0.037° and −0.768° for the last three (before 2026-12-04). `full` takes 1.3–2.1 M steps here \
 against 8–160 k (it follows the nutation).\n\
 - The Sperry's claim reads the long swell (13.5 s, its own gyro-ballistic period), as the text argues it \
