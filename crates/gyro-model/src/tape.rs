@@ -490,15 +490,8 @@ fn fusable_products(
         }
     }
     for id in (0..n).filter(|&id| live[id]) {
-        match rec.ops[id] {
-            Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
-                used_by(a, id as u32);
-                used_by(b, id as u32);
-            }
-            Op::Neg(a) | Op::Sin(a) | Op::Cos(a) | Op::Sqrt(a) | Op::Asin(a) => {
-                used_by(a, id as u32)
-            }
-            _ => {}
+        for x in rec.ops[id].arithmetic_operands() {
+            used_by(x, id as u32);
         }
     }
     (0..n)
@@ -510,6 +503,40 @@ fn fusable_products(
                 && matches!(rec.ops[user[id] as usize], Op::Add(..) | Op::Sub(..))
         })
         .collect()
+}
+
+/// The live constants' slots, numbered by first use (operations in recording order, then the
+/// solves' operands as their first component is met, then the outputs), and their values; every
+/// other node's slot is left unset (`u32::MAX`). Not by recording order: constants are shared by
+/// value, so a constant's recording order depends on whether an equal value was recorded earlier
+/// (even by dead work), and with it the shape. Numbered by use, two recordings of the same
+/// arithmetic have one shape whatever the coincidences before it.
+fn number_constants(rec: &Recorder, live: &[bool], outputs: &[Tr]) -> (Vec<u32>, Vec<f64>) {
+    let n = rec.ops.len();
+    let mut slot = vec![u32::MAX; n];
+    let mut consts = Vec::new();
+    let mut number = |x: u32| {
+        if let Op::Const(c) = rec.ops[x as usize]
+            && slot[x as usize] == u32::MAX
+        {
+            slot[x as usize] = consts.len() as u32;
+            consts.push(c);
+        }
+    };
+    let mut solve_seen = vec![false; rec.solves.len()];
+    for id in (0..n).filter(|&id| live[id]) {
+        let op = rec.ops[id];
+        op.arithmetic_operands().for_each(&mut number);
+        if let Op::SolveOut(sv, _) = op
+            && !solve_seen[sv as usize]
+        {
+            solve_seen[sv as usize] = true;
+            let spec = &rec.solves[sv as usize];
+            spec.a.iter().chain(&spec.b).for_each(|&x| number(x));
+        }
+    }
+    outputs.iter().for_each(|o| number(o.id));
+    (slot, consts)
 }
 
 /// Drops dead nodes and numbers slots: constants (by first use), inputs, then operations in
@@ -560,43 +587,7 @@ fn compact(rec: Recorder, n_inputs: usize, outputs: &[Tr]) -> Tape {
         }
     }
     let fused = fusable_products(&rec, &live, &solve_live, outputs);
-    // Constants are numbered by their first use, not by when they were recorded: constants are
-    // shared by value, so a constant's recording order depends on whether an equal value was
-    // recorded earlier (even by dead work), and with it the shape. Numbered by use, two
-    // recordings of the same arithmetic have one shape whatever the coincidences before it.
-    let mut slot = vec![u32::MAX; n];
-    let mut consts = Vec::new();
-    let mut number = |x: u32, slot: &mut [u32]| {
-        if let Op::Const(c) = rec.ops[x as usize]
-            && slot[x as usize] == u32::MAX
-        {
-            slot[x as usize] = consts.len() as u32;
-            consts.push(c);
-        }
-    };
-    let mut solve_seen = vec![false; rec.solves.len()];
-    for id in (0..n).filter(|&id| live[id]) {
-        match rec.ops[id] {
-            Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
-                number(a, &mut slot);
-                number(b, &mut slot);
-            }
-            Op::Neg(a) | Op::Sin(a) | Op::Cos(a) | Op::Sqrt(a) | Op::Asin(a) => {
-                number(a, &mut slot)
-            }
-            Op::SolveOut(sv, _) if !solve_seen[sv as usize] => {
-                solve_seen[sv as usize] = true;
-                let spec = &rec.solves[sv as usize];
-                for &x in spec.a.iter().chain(&spec.b) {
-                    number(x, &mut slot);
-                }
-            }
-            _ => {}
-        }
-    }
-    for o in outputs {
-        number(o.id, &mut slot);
-    }
+    let (mut slot, consts) = number_constants(&rec, &live, outputs);
     let base = consts.len();
     for id in 0..n {
         if let Op::Input(i) = rec.ops[id] {
@@ -951,6 +942,18 @@ impl Tape {
 }
 
 impl Op {
+    /// The recorded nodes an arithmetic operation reads (none for constants, inputs and solves).
+    fn arithmetic_operands(self) -> impl Iterator<Item = u32> {
+        let (ops, n) = match self {
+            Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
+                ([a, b], 2)
+            }
+            Op::Neg(a) | Op::Sin(a) | Op::Cos(a) | Op::Sqrt(a) | Op::Asin(a) => ([a, 0], 1),
+            _ => ([0, 0], 0),
+        };
+        ops.into_iter().take(n)
+    }
+
     /// A kind number and the operands, for fingerprints.
     fn parts(&self) -> (u64, Vec<u32>) {
         match *self {

@@ -561,9 +561,10 @@ fn rolling_error(overrides: &[(&str, f64)], fidelity: &str) -> (f64, TwinGyro) {
 /// On the design as shipped (factor 0.140) and with the wire 100 τ₀ stiff (factor 0.610): the
 /// error grows between the two as the factor does, and each is the factor times the single
 /// frame's closed form ½ sinΔ cosΔ (J₀/g)² 3ap/(2τ), within 10 % (measured 0.99 of it on the
-/// shipped design, 0.94 on the stiff wire, with `gyrolab run` on the 6-h scene). (61) holds no term in the gimbals'
-/// friction (the spider's viscous m, n); the ship's roll drags the spider through it, an error
-/// opposing the quadrantal one that grows against it as the swell lengthens. With frictionless
+/// shipped design, 0.94 on the stiff wire, with `gyrolab run` on the 6-h scene). (61) holds no
+/// term in the gimbals' friction (the spider's viscous m, n); the ship's roll drags the spider
+/// through it, an error opposing the quadrantal one that grows against it as the swell
+/// lengthens. With frictionless
 /// gimbals the error is (61)'s within 10 % (measured 1.04); with the Sperry 1911's friction
 /// (15 N·m·s/rad, a ratio ≈ 0.5 of the spider's ≈ 1-s pendulum, shipped until 2026-12-05) it falls
 /// short, 0.82 of it (asserted below 0.9; on 20- and 40-s swells of the same 4° 0.50 and −0.74,
