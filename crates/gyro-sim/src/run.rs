@@ -64,6 +64,9 @@ impl OdeSystem for ModelSystem<'_> {
         self.model.jacobian(t, x, jac);
         true
     }
+    fn is_autonomous(&self) -> bool {
+        self.model.is_autonomous()
+    }
 }
 
 /// The solver's work so far, as a run's observer sees it (see [`Simulation::run_with_progress`]).
@@ -169,6 +172,9 @@ impl OdeSystem for CountingSystem<'_> {
             &self.counts.rejected_steps
         };
         c.set(c.get() + 1);
+    }
+    fn is_autonomous(&self) -> bool {
+        self.inner.is_autonomous()
     }
 }
 

@@ -203,6 +203,41 @@ fn body_axes_engine_matches_the_reference_on_every_shipped_scene() {
     }
 }
 
+/// A model that calls itself autonomous (a stationary base: RODAS4 then skips its ∂f/∂t
+/// difference) is so to the bit: its right-hand side and Jacobian at hours apart are equal.
+/// And the moving scenes do not claim it.
+#[test]
+fn models_that_claim_autonomy_do_not_depend_on_time() {
+    let mut rng = Lcg(11);
+    let (mut autonomous, mut moving) = (0, 0);
+    for (label, _, sim) in crate::support::shipped_models() {
+        let m = &sim.model;
+        if !m.is_autonomous() {
+            moving += 1;
+            continue;
+        }
+        autonomous += 1;
+        let n = m.dim();
+        let mut x = m.x0.clone();
+        for v in x.iter_mut().take(n / 2) {
+            *v += 0.1 * rng.next();
+        }
+        let (mut f0, mut f1) = (vec![0.0; n], vec![0.0; n]);
+        let (mut j0, mut j1) = (vec![0.0; n * n], vec![0.0; n * n]);
+        assert!(m.rhs(0.0, &x, &mut f0), "{label}: singular at t = 0");
+        m.jacobian(0.0, &x, &mut j0);
+        for t in [1e-7, 1.0, 7_654.321] {
+            assert!(m.rhs(t, &x, &mut f1), "{label}: singular at t = {t}");
+            m.jacobian(t, &x, &mut j1);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&f0), bits(&f1), "{label}: f depends on t ({t} s)");
+            assert_eq!(bits(&j0), bits(&j1), "{label}: df/dx depends on t ({t} s)");
+        }
+    }
+    println!("{autonomous} autonomous models, {moving} on a moving base");
+    assert!(autonomous >= 20 && moving >= 20, "{autonomous} / {moving}");
+}
+
 /// Every path of the body-axes engine in one (physically arbitrary) chain.
 const ODD_DESIGN: &str = r#"
 name = "odd-chain"

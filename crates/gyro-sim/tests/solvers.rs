@@ -586,6 +586,64 @@ fn kepler_invariants_drift_is_small() {
     }
 }
 
+/// A system as it is, but saying whether it is autonomous as told.
+struct Claims<P>(P, bool);
+impl<P: Problem> OdeSystem for Claims<P> {
+    fn dim(&self) -> usize {
+        self.0.dim()
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], d: &mut [f64]) {
+        self.0.rhs(t, x, d)
+    }
+    fn jacobian(&mut self, t: f64, x: &[f64], jac: &mut [f64]) -> bool {
+        self.0.jacobian(t, x, jac)
+    }
+    fn is_autonomous(&self) -> bool {
+        self.1
+    }
+}
+impl<P: Problem> Problem for Claims<P> {
+    fn name(&self) -> &'static str {
+        self.0.name()
+    }
+    fn x0(&self) -> Vec<f64> {
+        self.0.x0()
+    }
+    fn exact(&self, t: f64) -> Vec<f64> {
+        self.0.exact(t)
+    }
+}
+
+/// RODAS4 on an autonomous system: ∂f/∂t is not differenced (one rhs call a Jacobian saved),
+/// and the run is the same to the bit, since the difference it skips is exactly zero.
+#[test]
+fn rodas4_skips_the_time_difference_of_an_autonomous_system() {
+    let t = tol(1e-6, 1e-9);
+    let [told, skipped] = [false, true].map(|autonomous| {
+        let mut p = Claims(StiffOscillator::new(true), autonomous);
+        solve(&mut p, Method::Rodas4, &t, 2000.0, 10.0, &[])
+    });
+    let bits = |r: &Run| -> Vec<u64> {
+        r.samples
+            .iter()
+            .flat_map(|(t, x)| std::iter::once(t.to_bits()).chain(x.iter().map(|v| v.to_bits())))
+            .collect()
+    };
+    assert_eq!(bits(&told), bits(&skipped), "the skip changed the solution");
+    assert_eq!(told.stats.steps, skipped.stats.steps);
+    assert_eq!(told.stats.rejected_steps, skipped.stats.rejected_steps);
+    let saved = told.stats.rhs_evals - skipped.stats.rhs_evals;
+    let jacobians = skipped.stats.jacobian_evals;
+    eprintln!(
+        "rodas4: {} rhs differencing df/dt, {} skipping it ({jacobians} Jacobians)",
+        told.stats.rhs_evals, skipped.stats.rhs_evals
+    );
+    assert!(
+        jacobians > 100 && saved == jacobians,
+        "saved {saved} of {jacobians}"
+    );
+}
+
 /// The reason Rodas4 is here: slow motion plus fast lightly damped nutation. Rodas4 resolves
 /// the nutation while its transient is above the tolerance, then steps over it with steps of
 /// seconds (set by the slow mode), while Dopri5 stays capped by stability at ~3/ω for the whole

@@ -94,6 +94,9 @@ impl OdeSystem for Foucault44Bis {
         Foucault44Bis::jacobian(self, x, jac);
         true
     }
+    fn is_autonomous(&self) -> bool {
+        true
+    }
 }
 
 type V<T> = [T; 3];
@@ -698,5 +701,8 @@ impl OdeSystem for Anschutz1906 {
     }
     fn jacobian(&mut self, _t: f64, x: &[f64], jac: &mut [f64]) -> bool {
         Anschutz1906::jacobian(self, x, jac)
+    }
+    fn is_autonomous(&self) -> bool {
+        true
     }
 }

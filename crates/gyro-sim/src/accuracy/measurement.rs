@@ -86,6 +86,9 @@ impl<S: OdeSystem> OdeSystem for Budget<S> {
     fn jacobian(&mut self, t: f64, x: &[f64], jac: &mut [f64]) -> bool {
         self.inner.jacobian(t, x, jac)
     }
+    fn is_autonomous(&self) -> bool {
+        self.inner.is_autonomous()
+    }
 }
 
 impl Case {

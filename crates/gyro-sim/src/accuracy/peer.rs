@@ -35,6 +35,9 @@ impl OdeSystem for Eq44Bis {
         ]);
         true
     }
+    fn is_autonomous(&self) -> bool {
+        true
+    }
 }
 
 /// One peer measurement.

@@ -93,6 +93,9 @@ impl OdeSystem for LinearSystem {
         jac.copy_from_slice(&self.a);
         true
     }
+    fn is_autonomous(&self) -> bool {
+        true
+    }
 }
 
 /// Length of the Anschütz cases: about one damped period (4110 s at 50°N).

@@ -51,6 +51,12 @@ pub trait OdeSystem {
     /// Told of every step attempt as the integrator counts it (accepted or rejected), so an
     /// observer can report steps during a run; the final [`SolverStats`] hold the same totals.
     fn step_counted(&mut self, _accepted: bool) {}
+    /// True when f does not depend on t (f(t, x) = f(t', x) to the bit): RODAS4 then takes
+    /// ∂f/∂t = 0 instead of spending an rhs call per step on a difference that is exactly
+    /// zero. A wrapper must forward it; the default, false, is always safe.
+    fn is_autonomous(&self) -> bool {
+        false
+    }
 }
 
 /// Integration method.

@@ -4,9 +4,9 @@
 //!
 //! Per step: f(t, x); the Jacobian df/dx — the system's exact one when it provides it, else
 //! central differences (2n rhs calls, increment cbrt(eps)·max(|x_j|, 1e-2)); df/dt by a
-//! forward difference in t (1 rhs call, always: the trait cannot tell an autonomous system, and
-//! models driven by a ship program are not); one LU of (1/(γh)) I − J (partial pivoting,
-//! `linalg`); 5 further rhs calls. The Jacobian is reused when a step is retried at a smaller
+//! forward difference in t (1 rhs call; none when the system says it is autonomous, as a model
+//! on a stationary base does: the difference is then exactly zero); one LU of (1/(γh)) I − J
+//! (partial pivoting, `linalg`); 5 further rhs calls. The Jacobian is reused when a step is retried at a smaller
 //! h. The embedded 3rd-order solution gives the error estimate; step control is Gustafsson's
 //! predictive controller as in RODAS. Dense output is RODAS's 3rd-order continuous extension.
 //! A singular matrix halves the step; five in a row is an error.
@@ -143,11 +143,12 @@ impl Rodas4 {
                 stats,
             );
         }
-        // df/dt by a forward difference, kept inside the segment.
+        // df/dt by a forward difference, kept inside the segment; exactly zero, and not
+        // computed, when f does not depend on t (the difference would be 0 to the bit).
         let delta = (f64::EPSILON * t.abs().max(1e-5)).sqrt();
         let t_plus = w.at(t + delta);
         let delta = t_plus - te;
-        if delta > 0.0 {
+        if delta > 0.0 && !sys.is_autonomous() {
             sys.rhs(t_plus, x, &mut self.dy);
             stats.rhs_evals += 1;
             for i in 0..n {
