@@ -6,10 +6,10 @@
 //! central differences (2n rhs calls, increment cbrt(eps)·max(|x_j|, 1e-2)); df/dt by a
 //! forward difference in t (1 rhs call; none when the system says it is autonomous, as a model
 //! on a stationary base does: the difference is then exactly zero); one LU of (1/(γh)) I − J
-//! (partial pivoting, `linalg`); 5 further rhs calls. The Jacobian is reused when a step is retried at a smaller
-//! h. The embedded 3rd-order solution gives the error estimate; step control is Gustafsson's
-//! predictive controller as in RODAS. Dense output is RODAS's 3rd-order continuous extension.
-//! A singular matrix halves the step; five in a row is an error.
+//! (partial pivoting, `linalg`); 5 further rhs calls. The Jacobian is reused when a step is
+//! retried at a smaller h. The embedded 3rd-order solution gives the error estimate; step
+//! control is Gustafsson's predictive controller as in RODAS. Dense output is RODAS's 3rd-order
+//! continuous extension. A singular matrix halves the step; five in a row is an error.
 
 use super::linalg::{lu_decompose, lu_solve};
 use super::{
