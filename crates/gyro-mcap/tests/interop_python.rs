@@ -5,7 +5,6 @@
 use crate::common;
 
 use std::collections::HashMap;
-use std::path::PathBuf;
 use std::process::Command;
 
 use common::*;
@@ -24,7 +23,7 @@ fn python_mcap_decodes_every_channel() {
         ..Default::default()
     };
     write_sample(&path, steps, opts);
-    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/python/decode_recording.py");
+    let script = gyro_testkit::manifest_dir!().join("tests/python/decode_recording.py");
     let out = Command::new(&python)
         .arg(&script)
         .arg(&path)

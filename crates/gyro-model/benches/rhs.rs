@@ -13,7 +13,10 @@ use gyro_model::{
 use std::hint::black_box;
 
 fn design(name: &str) -> Option<Design> {
-    let path = format!("{}/../../designs/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    let path = gyro_testkit::repo_root!()
+        .join(format!("designs/{name}.toml"))
+        .display()
+        .to_string();
     let text = std::fs::read_to_string(path).ok()?;
     Design::from_toml(&format!("{name}.toml"), &text, &[]).ok()
 }

@@ -34,7 +34,10 @@ fn main() {
             std::process::exit(2);
         }
     };
-    let path = format!("{}/../../designs/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    let path = gyro_testkit::repo_root!()
+        .join(format!("designs/{name}.toml"))
+        .display()
+        .to_string();
     let design = std::fs::read_to_string(&path)
         .map_err(|e| format!("{path}: {e}"))
         .and_then(|t| Design::from_toml(&path, &t, &[]).map_err(|e| e.to_string()));

@@ -11,11 +11,9 @@ use gyro_model::{
 };
 
 fn design() -> Design {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../designs/anschutz-1906.toml"
-    ))
-    .expect("design");
+    let text =
+        std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/anschutz-1906.toml"))
+            .expect("design");
     Design::from_toml("anschutz-1906.toml", &text, &[]).expect("valid")
 }
 

@@ -8,11 +8,9 @@ use gyro_model::{
 };
 
 fn design(overrides: &[(&str, f64)]) -> Design {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../designs/foucault-gyroscope.toml"
-    ))
-    .expect("design file");
+    let text =
+        std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/foucault-gyroscope.toml"))
+            .expect("design file");
     let ov: Vec<(String, toml::Value)> = overrides
         .iter()
         .map(|(k, v)| (k.to_string(), toml::Value::Float(*v)))

@@ -5,11 +5,8 @@ use gyro_model::Design;
 use gyro_sim::{Scene, SceneOverrides};
 
 fn design_text() -> String {
-    std::fs::read_to_string(format!(
-        "{}/../../designs/anschutz-1906.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .expect("design")
+    std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/anschutz-1906.toml"))
+        .expect("design")
 }
 
 fn design_error(text: &str) -> gyro_model::InputError {
@@ -21,7 +18,7 @@ fn design_error(text: &str) -> gyro_model::InputError {
 }
 
 fn scene_error(text: &str) -> gyro_model::InputError {
-    let dir = std::path::PathBuf::from(format!("{}/../../scenes", env!("CARGO_MANIFEST_DIR")));
+    let dir = gyro_testkit::repo_root!().join("scenes");
     match std::panic::catch_unwind(|| {
         Scene::from_toml(
             "my-scene.toml",
@@ -62,11 +59,9 @@ fn negative_inertia_names_file_line_key_and_range() {
 
 #[test]
 fn zero_spin_is_refused() {
-    let foucault = std::fs::read_to_string(format!(
-        "{}/../../designs/foucault-gyroscope.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .expect("design");
+    let foucault =
+        std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/foucault-gyroscope.toml"))
+            .expect("design");
     let text = foucault.replace("spin_rpm = 9000.0", "spin_rpm = 0.0");
     let e = design_error(&text);
     assert_eq!(e.key, "body.torus.rotor.spin_rpm");
@@ -222,11 +217,8 @@ fn design_override_of_a_missing_key_names_it() {
 }
 
 fn sperry_text() -> String {
-    std::fs::read_to_string(format!(
-        "{}/../../designs/sperry-1911.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .expect("design")
+    std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/sperry-1911.toml"))
+        .expect("design")
 }
 
 /// The Sperry's relations: a contact naming an unknown coordinate, a servo reading itself, a
@@ -271,21 +263,15 @@ fn spin_reversal_is_refused_unless_the_design_allows_it() {
     assert!(e.message.contains("does not allow"), "{e}");
     assert_eq!(e.key, "body.rotor.rotor.spin_rpm", "{e}");
     assert_eq!(e.line, Some(line_of(&text, "= -spin_rpm")));
-    let foucault = std::fs::read_to_string(format!(
-        "{}/../../designs/foucault-gyroscope.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .expect("design");
+    let foucault =
+        std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/foucault-gyroscope.toml"))
+            .expect("design");
     let reversed = foucault.replace("spin_rpm = 9000.0", "spin_rpm = -9000.0");
     Design::from_toml("foucault.toml", &reversed, &[]).expect("reversible");
 }
 
 fn slough_text() -> String {
-    std::fs::read_to_string(format!(
-        "{}/../../designs/slough.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .expect("design")
+    std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/slough.toml")).expect("design")
 }
 
 /// The Slough's pots: a zero open section, a level that is also a hinge angle, an unknown

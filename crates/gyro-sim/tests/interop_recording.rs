@@ -74,8 +74,8 @@ fn python_mcap_decodes_every_channel_of_a_shipped_scene() {
         .unwrap()
         .message_count;
     let mid = tf_rows / 2;
-    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../gyro-mcap/tests/python/decode_recording.py");
+    let script =
+        gyro_testkit::manifest_dir!().join("../gyro-mcap/tests/python/decode_recording.py");
     let out = Command::new(&python)
         .arg(&script)
         .arg(path)
@@ -230,7 +230,7 @@ fn rerun_mcap_convert_turns_the_poses_into_transforms_of_every_body() {
     );
     assert!(rrd.exists());
 
-    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/rrd_transforms.py");
+    let script = gyro_testkit::manifest_dir!().join("tests/rrd_transforms.py");
     let out = Command::new(&python)
         .arg(&script)
         .arg(&rrd)

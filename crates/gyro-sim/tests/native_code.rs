@@ -51,12 +51,9 @@ fn generated_native_code_is_current_and_runs() {
     let source = gyro_model::native_source(&models);
     let checked_in = include_str!("../../gyro-model/src/native/generated.rs");
     if std::env::var_os("GYROLAB_BLESS").is_some() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../gyro-model/src/native/generated.rs"
-        );
-        std::fs::write(path, &source).expect("writes generated.rs");
-        eprintln!("wrote {path}; build again to use it");
+        let path = gyro_testkit::manifest_dir!().join("../gyro-model/src/native/generated.rs");
+        std::fs::write(&path, &source).expect("writes generated.rs");
+        eprintln!("wrote {}; build again to use it", path.display());
         return;
     }
     assert!(

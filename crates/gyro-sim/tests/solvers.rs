@@ -405,10 +405,9 @@ fn check_all_methods<P: Problem>(p: &mut P, spec: &Spec) {
 
 /// (problem, method, rtol) → steps, rejected, rhs, jacobians; one line each, sorted, the
 /// problem's name with `-` for spaces.
-const SNAPSHOT: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/tests/snapshots/solver_stats.txt"
-);
+fn snapshot() -> std::path::PathBuf {
+    gyro_testkit::manifest_dir!().join("tests/snapshots/solver_stats.txt")
+}
 
 const SNAPSHOT_HEADER: &str = "\
 # Work of each integrator on the closed-form problems of tests/solvers.rs (its harness_* tests):
@@ -439,7 +438,7 @@ fn snapshot_key(line: &str) -> String {
 fn check_snapshot(problem: &str, lines: &[String]) {
     static FILE: std::sync::Mutex<()> = std::sync::Mutex::new(());
     let _one_at_a_time = FILE.lock().unwrap_or_else(|e| e.into_inner());
-    let text = std::fs::read_to_string(SNAPSHOT).unwrap_or_default();
+    let text = std::fs::read_to_string(snapshot()).unwrap_or_default();
     let of_problem = |l: &&str| l.split_whitespace().next() == Some(problem);
     let data = || {
         text.lines()
@@ -459,10 +458,9 @@ fn check_snapshot(problem: &str, lines: &[String]) {
             out.push_str(l);
             out.push('\n');
         }
-        std::fs::create_dir_all(std::path::Path::new(SNAPSHOT).parent().expect("folder"))
-            .expect("snapshot folder");
-        std::fs::write(SNAPSHOT, out).expect("snapshot written");
-        eprintln!("{problem}: {SNAPSHOT} rewritten");
+        std::fs::create_dir_all(snapshot().parent().expect("folder")).expect("snapshot folder");
+        std::fs::write(snapshot(), out).expect("snapshot written");
+        eprintln!("{problem}: {} rewritten", snapshot().display());
         return;
     }
     let mut diff = String::new();
@@ -479,9 +477,10 @@ fn check_snapshot(problem: &str, lines: &[String]) {
         }
     }
     panic!(
-        "{problem}: the solvers' work differs from {SNAPSHOT} (- snapshot, + this run):\n{diff}\
+        "{problem}: the solvers' work differs from {} (- snapshot, + this run):\n{diff}\
          If the change is intended: UPDATE_SNAPSHOTS=1 cargo test --release -p gyro-sim --test \
-         integration solvers::harness, and commit the snapshot with the reason."
+         integration solvers::harness, and commit the snapshot with the reason.",
+        snapshot().display()
     );
 }
 

@@ -309,10 +309,8 @@ fn the_verdict_follows_the_texts_numbers_and_refuses_others() {
 /// claims evaluated exactly when its design is in the list.
 #[test]
 fn the_comparison_reproduces_the_texts_claims_on_the_shipped_designs() {
-    let file = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../sweeps/six-compared.toml"
-    );
+    let path = gyro_testkit::repo_root!().join("sweeps/six-compared.toml");
+    let file = &*path.to_string_lossy();
     let text = std::fs::read_to_string(file)
         .expect("the shipped comparison study")
         .replace("recordings = \"all\"", "recordings = \"none\"");

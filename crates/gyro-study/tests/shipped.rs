@@ -10,13 +10,12 @@ use gyro_model::constants::EARTH_RATE_RAD_PER_S;
 use gyro_model::theory::{Anschutz, Slough, Sperry1911, rolling_error_magnitude_rad};
 use gyro_study::sweep::run_local;
 use gyro_study::{Plan, Study, report, table};
-use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 fn shipped(name: &str) -> Plan {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../sweeps")
+    let path = gyro_testkit::repo_root!()
+        .join("sweeps")
         .join(format!("{name}.toml"));
     Plan::new(Study::load(&path).expect("the shipped study reads")).expect("its scenes load")
 }

@@ -11,6 +11,11 @@
 //!   one set every interop test uses.
 //! - [`unavailable`] is how a test that cannot run here says so: a visible `SKIPPED:` line, or,
 //!   with `CI=true` in the environment, a panic, so that CI never passes a test it did not run.
+//! - [`manifest_dir!`] and [`repo_root!`] are where the test's crate and the repository are
+//!   *now*: cargo does not rebuild a workspace member that moved (a fresh clone beside another
+//!   reusing one target directory, as `.ci/run` does), so `env!("CARGO_MANIFEST_DIR")` can name
+//!   the checkout that last built the test, or one that is gone. Cargo sets the variable again
+//!   when it runs a test; these read that.
 
 use std::fs::{self, OpenOptions};
 use std::path::{Path, PathBuf};
@@ -37,6 +42,28 @@ pub const SWEEP: [&str; 3] = [RAY, PYARROW, PANDAS];
 
 /// Everything the interop tests install, in one venv.
 pub const INTEROP: [&str; 4] = [MCAP, MCAP_PROTOBUF_SUPPORT, PROTOBUF, RERUN_SDK];
+
+/// The calling crate's manifest folder as cargo gives it to the running test (see the crate
+/// doc); the one compiled in when the test binary is run by hand, outside cargo.
+#[macro_export]
+macro_rules! manifest_dir {
+    () => {
+        $crate::runtime_manifest_dir(env!("CARGO_MANIFEST_DIR"))
+    };
+}
+
+/// The repository's root folder (two above a crate's manifest folder: `crates/NAME`).
+#[macro_export]
+macro_rules! repo_root {
+    () => {
+        $crate::manifest_dir!().join("../..")
+    };
+}
+
+#[doc(hidden)]
+pub fn runtime_manifest_dir(compiled: &str) -> PathBuf {
+    std::env::var_os("CARGO_MANIFEST_DIR").map_or_else(|| PathBuf::from(compiled), PathBuf::from)
+}
 
 /// Whether this is a CI run (`CI=true`, as `.ci/run`'s environment sets it).
 pub fn ci() -> bool {

@@ -29,7 +29,7 @@ fn rerun_python() -> Option<PathBuf> {
 
 /// Entity → its JSON summary from tests/rrd_dump.py.
 fn dump(py: &Path, rrd: &Path) -> Value {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR"))
+    let script = gyro_testkit::manifest_dir!()
         .join("tests")
         .join("rrd_dump.py");
     let out = Command::new(py)

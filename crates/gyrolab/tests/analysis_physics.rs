@@ -18,7 +18,7 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 fn root() -> PathBuf {
-    Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).to_path_buf()
+    gyro_testkit::repo_root!()
 }
 
 /// Records `scene` to `dir/NAME.mcap` and analyses the file.

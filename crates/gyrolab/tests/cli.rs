@@ -136,7 +136,7 @@ fn ctrl_c_leaves_a_valid_recording_and_exits_130() {
 #[test]
 fn regression_check_passes_against_the_committed_baseline() {
     let d = tmp("regress");
-    let root = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+    let root = gyro_testkit::repo_root!();
     let out = gyrolab()
         .args(["regress", "--out"])
         .arg(&d)
@@ -219,7 +219,7 @@ fn accuracy_study_reports_errors_that_fall_with_the_tolerance_and_plots() {
 #[test]
 fn a_design_parameter_moved_by_5_percent_fails_regress_and_names_the_metric() {
     let d = tmp("perturbed");
-    let root = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+    let root = gyro_testkit::repo_root!();
     let design = std::fs::read_to_string(root.join("designs/anschutz-1906.toml")).expect("design");
     let original = "pendulous_moment_n_m = \"= 15e6 * 1e-7\"";
     assert!(design.contains(original), "the shipped design changed");

@@ -44,16 +44,13 @@ pub fn moored(
 }
 
 pub fn scene_text(name: &str) -> String {
-    std::fs::read_to_string(format!(
-        "{}/../../scenes/{name}.toml",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .expect("shipped scene")
+    std::fs::read_to_string(gyro_testkit::repo_root!().join(format!("scenes/{name}.toml")))
+        .expect("shipped scene")
 }
 
 /// Loads a scene from TOML text (designs resolved from the repository's designs/ folder).
 pub fn scene_from(text: &str, ov: &SceneOverrides) -> Scene {
-    let dir = std::path::PathBuf::from(format!("{}/../../scenes", env!("CARGO_MANIFEST_DIR")));
+    let dir = gyro_testkit::repo_root!().join("scenes");
     match Scene::from_toml("test-scene.toml", text, Some(&dir), ov) {
         Ok(s) => s,
         Err(e) => panic!("scene: {e}"),

@@ -13,8 +13,8 @@ pub fn tmp(name: &str) -> PathBuf {
 
 /// A study from text, as if read from `file` (relative paths resolve from the repository root).
 pub fn study(text: &str) -> Result<Plan, gyro_model::InputError> {
-    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/../../sweeps/test.toml");
-    Plan::new(Study::from_toml(file, text)?)
+    let file = gyro_testkit::repo_root!().join("sweeps/test.toml");
+    Plan::new(Study::from_toml(&file.to_string_lossy(), text)?)
 }
 
 /// The error of a study that must be refused.

@@ -6,7 +6,7 @@ use std::process::{Command, Output};
 /// The built `gyrolab`, run from the repository root (where `scenes/` and `designs/` are).
 pub fn gyrolab() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_gyrolab"));
-    c.current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+    c.current_dir(gyro_testkit::repo_root!());
     c
 }
 
