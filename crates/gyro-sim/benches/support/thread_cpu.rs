@@ -1,6 +1,5 @@
-//! Thread CPU time as a criterion measurement, for benches on a machine shared with builds: the
-//! same as `engines.rs`'s (that bench keeps its own copy; this one is `#[path]`-included by
-//! `handwritten.rs`).
+//! Thread CPU time as a criterion measurement, for benches on a machine shared with builds;
+//! `#[path]`-included by `engines.rs` and `handwritten.rs`.
 
 use criterion::Throughput;
 use criterion::measurement::{Measurement, ValueFormatter};
