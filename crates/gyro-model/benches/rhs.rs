@@ -13,10 +13,7 @@ use gyro_model::{
 use std::hint::black_box;
 
 fn design(name: &str) -> Option<Design> {
-    let path = gyro_testkit::repo_root!()
-        .join(format!("designs/{name}.toml"))
-        .display()
-        .to_string();
+    let path = gyro_testkit::repo_root!().join(format!("designs/{name}.toml"));
     let text = std::fs::read_to_string(path).ok()?;
     Design::from_toml(&format!("{name}.toml"), &text, &[]).ok()
 }

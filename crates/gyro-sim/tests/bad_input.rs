@@ -5,8 +5,7 @@ use gyro_model::Design;
 use gyro_sim::{Scene, SceneOverrides};
 
 fn design_text() -> String {
-    std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/anschutz-1906.toml"))
-        .expect("design")
+    crate::support::design_text("anschutz-1906")
 }
 
 fn design_error(text: &str) -> gyro_model::InputError {
@@ -59,9 +58,7 @@ fn negative_inertia_names_file_line_key_and_range() {
 
 #[test]
 fn zero_spin_is_refused() {
-    let foucault =
-        std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/foucault-gyroscope.toml"))
-            .expect("design");
+    let foucault = crate::support::design_text("foucault-gyroscope");
     let text = foucault.replace("spin_rpm = 9000.0", "spin_rpm = 0.0");
     let e = design_error(&text);
     assert_eq!(e.key, "body.torus.rotor.spin_rpm");
@@ -217,8 +214,7 @@ fn design_override_of_a_missing_key_names_it() {
 }
 
 fn sperry_text() -> String {
-    std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/sperry-1911.toml"))
-        .expect("design")
+    crate::support::design_text("sperry-1911")
 }
 
 /// The Sperry's relations: a contact naming an unknown coordinate, a servo reading itself, a
@@ -263,15 +259,13 @@ fn spin_reversal_is_refused_unless_the_design_allows_it() {
     assert!(e.message.contains("does not allow"), "{e}");
     assert_eq!(e.key, "body.rotor.rotor.spin_rpm", "{e}");
     assert_eq!(e.line, Some(line_of(&text, "= -spin_rpm")));
-    let foucault =
-        std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/foucault-gyroscope.toml"))
-            .expect("design");
+    let foucault = crate::support::design_text("foucault-gyroscope");
     let reversed = foucault.replace("spin_rpm = 9000.0", "spin_rpm = -9000.0");
     Design::from_toml("foucault.toml", &reversed, &[]).expect("reversible");
 }
 
 fn slough_text() -> String {
-    std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/slough.toml")).expect("design")
+    crate::support::design_text("slough")
 }
 
 /// The Slough's pots: a zero open section, a level that is also a hinge angle, an unknown

@@ -22,9 +22,7 @@ const HELD_ROTOR: &str = r#"spin_rpm = "= spin_rpm", spin = "held" }"#;
 /// The shipped Anschütz 1906 with a motor on its rotor (rated `rated_rpm`, starting at
 /// `initial_rpm`, time constant `tau_s`); the rotor's polar inertia is unchanged.
 fn motor_design(name: &str, rated_rpm: f64, initial_rpm: f64, tau_s: f64) -> PathBuf {
-    let text =
-        std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/anschutz-1906.toml"))
-            .expect("shipped design");
+    let text = crate::support::design_text("anschutz-1906");
     assert!(text.contains(HELD_ROTOR), "the shipped rotor line changed");
     let motor = format!(
         "spin_rpm = {rated_rpm:?}, spin = \"held\", motor = {{ spin_up_time_constant_s = {tau_s:?}, initial_spin_rpm = {initial_rpm:?} }} }}"
@@ -218,9 +216,7 @@ fn no_motor_compiles_no_motor_state_and_changes_nothing() {
 
 #[test]
 fn motor_options_are_checked() {
-    let text =
-        std::fs::read_to_string(gyro_testkit::repo_root!().join("designs/anschutz-1906.toml"))
-            .expect("shipped design");
+    let text = crate::support::design_text("anschutz-1906");
     let free = text.replace(
         HELD_ROTOR,
         "spin_rpm = 20000.0, spin = \"free\", motor = { spin_up_time_constant_s = 300.0, initial_spin_rpm = 0.0 } }",

@@ -438,7 +438,8 @@ fn snapshot_key(line: &str) -> String {
 fn check_snapshot(problem: &str, lines: &[String]) {
     static FILE: std::sync::Mutex<()> = std::sync::Mutex::new(());
     let _one_at_a_time = FILE.lock().unwrap_or_else(|e| e.into_inner());
-    let text = std::fs::read_to_string(snapshot()).unwrap_or_default();
+    let path = snapshot();
+    let text = std::fs::read_to_string(&path).unwrap_or_default();
     let of_problem = |l: &&str| l.split_whitespace().next() == Some(problem);
     let data = || {
         text.lines()
@@ -458,9 +459,9 @@ fn check_snapshot(problem: &str, lines: &[String]) {
             out.push_str(l);
             out.push('\n');
         }
-        std::fs::create_dir_all(snapshot().parent().expect("folder")).expect("snapshot folder");
-        std::fs::write(snapshot(), out).expect("snapshot written");
-        eprintln!("{problem}: {} rewritten", snapshot().display());
+        std::fs::create_dir_all(path.parent().expect("folder")).expect("snapshot folder");
+        std::fs::write(&path, out).expect("snapshot written");
+        eprintln!("{problem}: {} rewritten", path.display());
         return;
     }
     let mut diff = String::new();
@@ -480,7 +481,7 @@ fn check_snapshot(problem: &str, lines: &[String]) {
         "{problem}: the solvers' work differs from {} (- snapshot, + this run):\n{diff}\
          If the change is intended: UPDATE_SNAPSHOTS=1 cargo test --release -p gyro-sim --test \
          integration solvers::harness, and commit the snapshot with the reason.",
-        snapshot().display()
+        path.display()
     );
 }
 

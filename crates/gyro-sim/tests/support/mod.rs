@@ -43,6 +43,12 @@ pub fn moored(
     .expect("compiles")
 }
 
+/// The text of the shipped design `designs/NAME.toml`.
+pub fn design_text(name: &str) -> String {
+    std::fs::read_to_string(gyro_testkit::repo_root!().join(format!("designs/{name}.toml")))
+        .expect("shipped design")
+}
+
 pub fn scene_text(name: &str) -> String {
     std::fs::read_to_string(gyro_testkit::repo_root!().join(format!("scenes/{name}.toml")))
         .expect("shipped scene")
