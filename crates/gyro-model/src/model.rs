@@ -1175,12 +1175,15 @@ impl<M: ShipMotion> CompiledModel<M> {
                 return false;
             }
         }
-        for i in 0..dim {
+        // Rows as slices (one bounds check per row, not per entry); the same sums in the same
+        // order.
+        let (x, xe) = (&x[..dim], &xe[..dim]);
+        for (d, row) in dx[..dim].iter_mut().zip(self.linear_a.chunks_exact(dim)) {
             let mut s = 0.0;
-            for j in 0..dim {
-                s += self.linear_a[i * dim + j] * (x[j] - xe[j]);
+            for ((a, xj), ej) in row.iter().zip(x).zip(xe) {
+                s += a * (xj - ej);
             }
-            dx[i] += s;
+            *d += s;
         }
         true
     }
