@@ -58,45 +58,33 @@ pub(crate) fn lu_solve(a: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
         ($($k:literal)*) => {
             match n {
                 $($k => lu_solve_sized::<$k>(a, piv, b),)*
-                _ => lu_solve_any(a, n, piv, b),
+                _ => real_substitution(a, n, piv, &mut b[..n]),
             }
         };
     }
     sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
 }
 
+/// One size's solve, on a copy of `b` in an array (a function of its own per size: inlining all
+/// sixteen into `lu_solve` measured 2–4 % slower on RADAU5).
 fn lu_solve_sized<const N: usize>(a: &[f64], piv: &[usize], b: &mut [f64]) {
-    let (a, piv) = (&a[..N * N], &piv[..N]);
     let mut y = [0.0; N];
     y.copy_from_slice(&b[..N]);
-    for k in 0..N {
-        y.swap(k, piv[k]);
-    }
-    for j in 0..N {
-        let yj = y[j];
-        for i in j + 1..N {
-            y[i] -= a[i * N + j] * yj;
-        }
-    }
-    for i in (0..N).rev() {
-        let mut s = y[i];
-        for j in i + 1..N {
-            s -= a[i * N + j] * y[j];
-        }
-        y[i] = s / a[i * N + i];
-    }
+    real_substitution(&a[..N * N], N, &piv[..N], &mut y);
     b[..N].copy_from_slice(&y);
 }
 
-fn lu_solve_any(a: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
-    let b = &mut b[..n];
+/// Forward substitution column-oriented, backward row-oriented (the same operations in the same
+/// order as the textbook form); inlined so that a fixed `n` unrolls and `b` stays in registers.
+#[inline(always)]
+fn real_substitution(a: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
     for k in 0..n {
         b.swap(k, piv[k]);
     }
     for j in 0..n {
         let bj = b[j];
-        for (i, bi) in b.iter_mut().enumerate().skip(j + 1) {
-            *bi -= a[i * n + j] * bj;
+        for i in j + 1..n {
+            b[i] -= a[i * n + j] * bj;
         }
     }
     for i in (0..n).rev() {
@@ -185,8 +173,7 @@ pub(crate) fn lu_solve_complex(
     sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
 }
 
-/// Forward substitution column-oriented, backward row-oriented, as in [`lu_solve`] (the same
-/// operations in the same order as the textbook form); inlined so that a fixed `n` unrolls.
+/// The complex [`real_substitution`]: the same orientations and order as the textbook form.
 #[inline(always)]
 fn complex_substitution(
     re: &[f64],
