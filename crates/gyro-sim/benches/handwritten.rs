@@ -151,6 +151,7 @@ const RUN_TOL: Tolerances = Tolerances {
     atol: 1e-13,
     max_step_s: f64::INFINITY,
     initial_step_s: None,
+    jacobian_reuse_contraction: gyro_sim::solvers::DEFAULT_JACOBIAN_REUSE_CONTRACTION,
 };
 
 fn run<S: OdeSystem>(sys: &mut S, x0: &[f64], grid: &OutputGrid) -> (Vec<f64>, SolverStats) {

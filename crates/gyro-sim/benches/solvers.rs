@@ -32,6 +32,7 @@ fn bench_solvers(c: &mut Criterion) {
         atol: 1e-12,
         max_step_s: f64::INFINITY,
         initial_step_s: None,
+        jacobian_reuse_contraction: gyro_sim::solvers::DEFAULT_JACOBIAN_REUSE_CONTRACTION,
     };
     let grid = OutputGrid {
         t0: 0.0,

@@ -146,6 +146,19 @@ fn unknown_effect_and_fidelity_are_refused() {
         "{e}"
     );
     assert_eq!(e.line, Some(line_of(&text, "full_integrator")), "{e}");
+    // RADAU5's Jacobian-reuse threshold is a contraction factor, in (0, 1).
+    for bad in ["0.0", "1.0", "-0.1", "nan"] {
+        let text = scene("50.0", &format!("jacobian_reuse_contraction = {bad}"), "");
+        let e = scene_error(&text);
+        assert_eq!(e.key, "simulation.jacobian_reuse_contraction", "{e}");
+        assert_eq!(e.line, Some(line_of(&text, "jacobian_reuse")), "{e}");
+        assert!(e.message.contains("0 < value < 1"), "{e}");
+    }
+    let ok = scene("50.0", "jacobian_reuse_contraction = 0.1", "");
+    let dir = gyro_testkit::repo_root!().join("scenes");
+    let sc = Scene::from_toml("my-scene.toml", &ok, Some(&dir), &SceneOverrides::default())
+        .expect("0.1 is allowed");
+    assert_eq!(sc.tolerances.jacobian_reuse_contraction, 0.1);
 }
 
 /// `full_integrator` is what a scene runs at `full` fidelity, from the file or the command line;

@@ -74,6 +74,7 @@ fn no_fast_mode_along_a_rolling_run() {
         atol: 1e-10,
         max_step_s: f64::INFINITY,
         initial_step_s: None,
+        jacobian_reuse_contraction: gyro_sim::solvers::DEFAULT_JACOBIAN_REUSE_CONTRACTION,
     };
     sim.run(Method::Dop853, &tol, |t, x| {
         let m = modes(&sim, t, x).last().map_or(0.0, |e| e.0.hypot(e.1));
@@ -99,6 +100,7 @@ fn dop853_steps(scene: &str, rtol: f64) -> u64 {
         atol: rtol * 1e-2,
         max_step_s: f64::INFINITY,
         initial_step_s: None,
+        jacobian_reuse_contraction: gyro_sim::solvers::DEFAULT_JACOBIAN_REUSE_CONTRACTION,
     };
     sim.run(Method::Dop853, &tol, |_, _| ControlFlow::Continue(()))
         .expect("runs")

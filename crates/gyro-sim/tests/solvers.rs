@@ -274,6 +274,7 @@ fn tol(rtol: f64, atol: f64) -> Tolerances {
         atol,
         max_step_s: f64::INFINITY,
         initial_step_s: None,
+        jacobian_reuse_contraction: gyro_sim::solvers::DEFAULT_JACOBIAN_REUSE_CONTRACTION,
     }
 }
 
@@ -746,6 +747,8 @@ fn fixed_step_order_of_adaptive_methods() {
                     atol: 1e6,
                     max_step_s: h,
                     initial_step_s: Some(h),
+                    jacobian_reuse_contraction:
+                        gyro_sim::solvers::DEFAULT_JACOBIAN_REUSE_CONTRACTION,
                 };
                 let run = solve(&mut p, method, &fixed, TAU, TAU / 27.0, &[]);
                 assert_eq!(run.stats.steps, n as u64, "{method}");
@@ -1105,6 +1108,22 @@ fn invalid_options_are_rejected() {
                 ..good
             },
         ),
+        case(
+            "jacobian reuse contraction 0",
+            Method::Radau5,
+            Tolerances {
+                jacobian_reuse_contraction: 0.0,
+                ..good
+            },
+        ),
+        case(
+            "jacobian reuse contraction 1",
+            Method::Radau5,
+            Tolerances {
+                jacobian_reuse_contraction: 1.0,
+                ..good
+            },
+        ),
         case("rk4 step 0", Method::Rk4 { step_s: 0.0 }, good),
         case("rk4 step NaN", Method::Rk4 { step_s: f64::NAN }, good),
         Case {
@@ -1251,6 +1270,7 @@ fn radau5_fixed_step_order_at_step_ends_and_between() {
             atol: 1e6,
             max_step_s: h,
             initial_step_s: Some(h),
+            jacobian_reuse_contraction: gyro_sim::solvers::DEFAULT_JACOBIAN_REUSE_CONTRACTION,
         };
         let run = solve(p, Method::Radau5, &fixed, TAU, dt, &[]);
         assert_eq!(run.stats.steps, n as u64);
@@ -1289,6 +1309,7 @@ fn radau5_is_l_stable_on_a_very_stiff_linear_problem() {
         atol: 1e6,
         max_step_s: 1.0,
         initial_step_s: Some(1.0),
+        jacobian_reuse_contraction: gyro_sim::solvers::DEFAULT_JACOBIAN_REUSE_CONTRACTION,
     };
     let run = solve(&mut p, Method::Radau5, &fixed, 2.0, 1.0, &[]);
     assert_eq!(run.stats.steps, 2);

@@ -47,6 +47,7 @@ fn allocations_for(method: Method, t_end: f64) -> (u64, u64) {
         atol: 1e-12,
         max_step_s: f64::INFINITY,
         initial_step_s: None,
+        jacobian_reuse_contraction: gyro_sim::solvers::DEFAULT_JACOBIAN_REUSE_CONTRACTION,
     };
     let grid = OutputGrid {
         t0: 0.0,

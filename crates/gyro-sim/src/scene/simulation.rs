@@ -4,7 +4,7 @@
 use super::SourceText;
 use crate::program::ShipProgram;
 use crate::scene::SceneOverrides;
-use crate::solvers::{Method, Tolerances};
+use crate::solvers::{DEFAULT_JACOBIAN_REUSE_CONTRACTION, Method, Tolerances};
 use gyro_model::error::InputError;
 use gyro_model::{Effects, Fidelity};
 use serde::Deserialize;
@@ -28,6 +28,10 @@ pub(super) struct SimulationFile {
     atol: f64,
     #[serde(default)]
     max_step_s: Option<f64>,
+    /// RADAU5 keeps its Jacobian while the Newton iteration contracts by at most this
+    /// (Hairer's THET, default 0.001); ≈ 0.1 where a Jacobian costs many right-hand sides.
+    #[serde(default)]
+    jacobian_reuse_contraction: Option<f64>,
     /// `auto` (what the scene needs) or `all` (every effect compiled in, even at zero amplitude).
     #[serde(default = "default_effects")]
     effects: String,
@@ -51,6 +55,7 @@ impl Default for SimulationFile {
             rtol: default_rtol(),
             atol: default_atol(),
             max_step_s: None,
+            jacobian_reuse_contraction: None,
             effects: default_effects(),
             disable_effects: Vec::new(),
             pose_rate_hz: None,
@@ -178,11 +183,23 @@ pub(super) fn solver(
             "must be > 0".into(),
         ));
     }
+    let reuse = sim
+        .jacobian_reuse_contraction
+        .unwrap_or(DEFAULT_JACOBIAN_REUSE_CONTRACTION);
+    if !(reuse > 0.0 && reuse < 1.0) {
+        return Err(src.err(
+            Some("[simulation]"),
+            "jacobian_reuse_contraction",
+            "simulation.jacobian_reuse_contraction",
+            format!("{reuse} is out of range (allowed: 0 < value < 1; RADAU5's default 0.001)"),
+        ));
+    }
     let tolerances = Tolerances {
         rtol,
         atol,
         max_step_s: max_step,
         initial_step_s: None,
+        jacobian_reuse_contraction: reuse,
     };
     Ok((fidelity, method, tolerances))
 }

@@ -136,6 +136,11 @@ pub struct Tolerances {
     pub max_step_s: f64,
     /// First step after the start and after each breakpoint; `None` = Hairer's estimate.
     pub initial_step_s: Option<f64>,
+    /// RADAU5 only: the Jacobian is kept from step to step while the simplified Newton
+    /// iteration contracts by at most this factor per iteration, in (0, 1). Hairer's THET:
+    /// 0.001 by default; ≈ 0.1 where a Jacobian costs many right-hand sides (a slower
+    /// iteration is then cheaper than a fresh Jacobian).
+    pub jacobian_reuse_contraction: f64,
 }
 
 impl Default for Tolerances {
@@ -146,9 +151,13 @@ impl Default for Tolerances {
             atol: 1e-10,
             max_step_s: f64::INFINITY,
             initial_step_s: None,
+            jacobian_reuse_contraction: DEFAULT_JACOBIAN_REUSE_CONTRACTION,
         }
     }
 }
+
+/// RADAU5's default [`Tolerances::jacobian_reuse_contraction`] (Hairer's THET).
+pub const DEFAULT_JACOBIAN_REUSE_CONTRACTION: f64 = 0.001;
 
 /// Work counters of one `integrate` call.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -334,6 +343,12 @@ fn validate(
         && !(h0.is_finite() && h0 > 0.0)
     {
         return bad(format!("initial_step_s must be finite and > 0, got {h0}"));
+    }
+    let theta = tol.jacobian_reuse_contraction;
+    if !(theta > 0.0 && theta < 1.0) {
+        return bad(format!(
+            "jacobian_reuse_contraction must be in (0, 1), got {theta}"
+        ));
     }
     if let Method::Rk4 { step_s } = method
         && !(step_s.is_finite() && step_s > 0.0)

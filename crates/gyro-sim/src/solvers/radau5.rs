@@ -11,7 +11,9 @@
 //! calls; at most 7 iterations, stopped when the predicted remaining error is below
 //! `fnewt` = max(10 eps/rtol', min(0.03, √rtol')). Newton starts from the previous step's
 //! collocation polynomial extrapolated (zero after a start or a breakpoint). As in RADAU5, J
-//! is kept from step to step while the Newton contraction θ ≤ 0.001, and the LUs too while the
+//! is kept from step to step while the Newton contraction θ ≤ THET
+//! ([`Tolerances::jacobian_reuse_contraction`], 0.001 by default as in RADAU5; Hairer advises
+//! ≈ 0.1 when Jacobians are dear), and the LUs too while the
 //! step is kept (a proposed change of h/h_old in [1, 1.2] is not made); J is recomputed after a
 //! rejection only when it is not already fresh. A Newton iteration that diverges (θ ≥ 0.99) or
 //! would need more than 7 iterations rejects the step (h/2, or the h predicted from θ).
@@ -82,8 +84,6 @@ const TI33: f64 = -0.596_039_204_828_224_924_97;
 
 /// Newton iterations per step (RADAU5's NIT).
 const NIT: u32 = 7;
-/// Keep J while the Newton contraction is below this (THET).
-const THET: f64 = 0.001;
 const SAFE: f64 = 0.9;
 /// Bounds of h/h_new (FACR, FACL): 0.2 ≤ h_new/h ≤ 8.
 const FACR: f64 = 1.0 / 8.0;
@@ -375,7 +375,7 @@ impl Stepper for Radau5 {
         // Simplified Newton iteration.
         let (fac1, alphn, betan) = (U1 / h, ALPH / h, BETA / h);
         self.faccon = self.faccon.max(f64::EPSILON).powf(0.8);
-        let mut theta = THET;
+        let mut theta = tol.jacobian_reuse_contraction;
         let mut newt = 0u32;
         let mut dynold = 0.0;
         let mut thqold = 0.0;
@@ -507,9 +507,9 @@ impl Stepper for Radau5 {
             self.rejected = false;
             // Keep J for the next step while Newton contracts fast; keep h (and the LUs) when
             // the change would be small.
-            self.jac_usable = theta <= THET;
+            self.jac_usable = theta <= tol.jacobian_reuse_contraction;
             let qt = h_new / h;
-            if theta <= THET && (QUOT1..=QUOT2).contains(&qt) {
+            if theta <= tol.jacobian_reuse_contraction && (QUOT1..=QUOT2).contains(&qt) {
                 h_new = h;
             }
             Ok(Attempt {

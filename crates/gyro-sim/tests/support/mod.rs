@@ -155,6 +155,7 @@ pub fn tol(rtol: f64, atol: f64) -> Tolerances {
         atol,
         max_step_s: f64::INFINITY,
         initial_step_s: None,
+        jacobian_reuse_contraction: gyro_sim::solvers::DEFAULT_JACOBIAN_REUSE_CONTRACTION,
     }
 }
 
