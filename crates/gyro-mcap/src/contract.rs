@@ -263,6 +263,9 @@ pub mod run_record {
     pub const INTEGRATOR: &str = "integrator";
     pub const RTOL: &str = "rtol";
     pub const ATOL: &str = "atol";
+    /// RADAU5's Jacobian-reuse threshold (the Newton contraction below which it keeps its
+    /// Jacobian); absent from files of earlier builds, which all ran 0.001.
+    pub const JACOBIAN_REUSE_CONTRACTION: &str = "jacobian_reuse_contraction";
     /// Comma-separated active effects.
     pub const EFFECTS: &str = "effects";
     /// Comma-separated coordinates of the design.

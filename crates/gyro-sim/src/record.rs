@@ -703,6 +703,10 @@ fn run_metadata(
         (run_record::INTEGRATOR, scene.method.to_string()),
         (run_record::RTOL, format!("{:e}", scene.tolerances.rtol)),
         (run_record::ATOL, format!("{:e}", scene.tolerances.atol)),
+        (
+            run_record::JACOBIAN_REUSE_CONTRACTION,
+            format!("{:e}", scene.tolerances.jacobian_reuse_contraction),
+        ),
         (run_record::EFFECTS, model.effects.names().join(",")),
         (run_record::COORDINATES, coords.join(",")),
         (

@@ -194,6 +194,9 @@ fn python_mcap_decodes_every_channel_of_a_shipped_scene() {
         let theirs: BTreeMap<String, String> = serde_json::from_value(md[name].clone()).unwrap();
         assert_eq!(&theirs, entries, "metadata {name}");
     }
+    // The run's solver settings, RADAU5's Jacobian-reuse threshold among them (the default).
+    let run = &rec.metadata()["run"];
+    assert_eq!(run["jacobian_reuse_contraction"], "1e-3", "{run:?}");
     for a in rec.attachments() {
         assert_eq!(py["attachments"][&a.name], a.data.len(), "{}", a.name);
     }

@@ -55,6 +55,10 @@ pub struct RunArgs {
     pub rtol: Option<f64>,
     #[arg(long)]
     pub atol: Option<f64>,
+    /// RADAU5 keeps its Jacobian while its Newton iteration contracts by at most this per
+    /// iteration (0 < value < 1; default 0.001, or the scene's; ≈ 0.1 where Jacobians are dear).
+    #[arg(long)]
+    pub jacobian_reuse_contraction: Option<f64>,
     /// Output rate, Hz.
     #[arg(long)]
     pub rate_hz: Option<f64>,
@@ -99,12 +103,20 @@ fn overrides(a: &RunArgs) -> Result<SceneOverrides, CliError> {
             )));
         }
     }
+    if let Some(x) = a.jacobian_reuse_contraction
+        && !(x > 0.0 && x < 1.0)
+    {
+        return Err(bad(format!(
+            "--jacobian-reuse-contraction: {x} is out of range (allowed: 0 < value < 1)"
+        )));
+    }
     Ok(SceneOverrides {
         design: a.design.clone(),
         fidelity,
         method,
         rtol: a.rtol,
         atol: a.atol,
+        jacobian_reuse_contraction: a.jacobian_reuse_contraction,
         output_rate_hz: a.rate_hz,
         duration_s: a.duration_s,
     })
@@ -202,6 +214,8 @@ fn print_summary(s: &gyro_sim::RecordSummary, scene: &Scene, json: bool) {
             "fidelity": scene.fidelity.to_string(),
             "integrator": scene.method.to_string(),
             "rtol": scene.tolerances.rtol,
+            "atol": scene.tolerances.atol,
+            "jacobian_reuse_contraction": scene.tolerances.jacobian_reuse_contraction,
             "steps": st.steps,
             "rejected_steps": st.rejected_steps,
             "rhs_evals": st.rhs_evals,

@@ -39,6 +39,16 @@ fn bad_input_exits_2_with_a_message_naming_the_file() {
         .expect("runs");
     assert_eq!(out.status.code(), Some(2));
     let out = gyrolab()
+        .args(["run", "harbour-50n", "--jacobian-reuse-contraction", "1.5"])
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--jacobian-reuse-contraction") && err.contains("0 < value < 1"),
+        "{err}"
+    );
+    let out = gyrolab()
         .args(["inspect", "Cargo.toml"])
         .output()
         .expect("runs");
@@ -51,10 +61,12 @@ fn run_then_inspect_and_analyze_in_json() {
     let file = d.join("h.mcap");
     let out = succeed(
         gyrolab()
-            .args(["run", "harbour-50n", "--json", "--duration-s", "7200", "-o"])
+            .args(["run", "harbour-50n", "--json", "--duration-s", "7200"])
+            .args(["--jacobian-reuse-contraction", "0.1", "-o"])
             .arg(&file),
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
+    assert_eq!(v["jacobian_reuse_contraction"], 0.1);
     assert_eq!(
         v["effects"],
         serde_json::json!(["earth_rotation", "damper", "friction"])

@@ -97,6 +97,8 @@ pub struct SceneOverrides {
     pub method: Option<Method>,
     pub rtol: Option<f64>,
     pub atol: Option<f64>,
+    /// RADAU5's Jacobian-reuse threshold ([`crate::solvers::Tolerances`]).
+    pub jacobian_reuse_contraction: Option<f64>,
     pub output_rate_hz: Option<f64>,
     pub duration_s: Option<f64>,
 }

@@ -183,8 +183,9 @@ pub(super) fn solver(
             "must be > 0".into(),
         ));
     }
-    let reuse = sim
+    let reuse = ov
         .jacobian_reuse_contraction
+        .or(sim.jacobian_reuse_contraction)
         .unwrap_or(DEFAULT_JACOBIAN_REUSE_CONTRACTION);
     if !(reuse > 0.0 && reuse < 1.0) {
         return Err(src.err(
