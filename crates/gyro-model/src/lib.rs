@@ -43,7 +43,7 @@ pub use design::{
     Compartment, CoordinateRole, CoordinateUnit, Design, Force, Linkage, Pots, Root, Shape,
     SpinMode, Tank, Valves,
 };
-pub use dual::{Jet, Real};
+pub use dual::{Jet, Real, sin_cos};
 pub use earth::{BaseEffects, Moored, ShipKinematics, ShipMotion};
 pub use error::InputError;
 pub use model::{

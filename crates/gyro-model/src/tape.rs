@@ -302,7 +302,7 @@ impl Real for Tr {
         self.v
     }
     fn sin_cos(self) -> (Self, Self) {
-        let (s, c) = self.v.sin_cos();
+        let (s, c) = crate::dual::sin_cos(self.v);
         with_recorder(|r| (r.unary(Op::Sin, self, s), r.unary(Op::Cos, self, c)))
     }
     fn sqrt(self) -> Self {
@@ -886,16 +886,27 @@ impl Tape {
             "    let out: &mut [f64; {no}] = out.try_into().expect(\"{no} outputs\");"
         );
         let mut k = nc + ni;
-        for op in &self.ops {
+        let mut ops = self.ops.iter().peekable();
+        while let Some(op) = ops.next() {
             let e = |a: u32, b: u32, o: &str| format!("{} {o} {}", slot(a), slot(b));
+            // The recorder writes sin and cos of one angle side by side: one call computes both
+            // (the same bits as the two calls, see `dual::sin_cos`).
+            if let (Op::Sin(a), Some(&&Op::Cos(b))) = (*op, ops.peek())
+                && a == b
+            {
+                let _ = writeln!(w, "    let (v{k}, v{}) = libm::sincos({});", k + 1, slot(a));
+                ops.next();
+                k += 2;
+                continue;
+            }
             let expr = match *op {
                 Op::Add(a, b) => e(a, b, "+"),
                 Op::Sub(a, b) => e(a, b, "-"),
                 Op::Mul(a, b) => e(a, b, "*"),
                 Op::Div(a, b) => e(a, b, "/"),
                 Op::Neg(a) => format!("-{}", slot(a)),
-                Op::Sin(a) => format!("{}.sin()", slot(a)),
-                Op::Cos(a) => format!("{}.cos()", slot(a)),
+                Op::Sin(a) => format!("libm::sin({})", slot(a)),
+                Op::Cos(a) => format!("libm::cos({})", slot(a)),
                 Op::Sqrt(a) => format!("{}.sqrt()", slot(a)),
                 Op::Atan2(a, b) => format!("{}.atan2({})", slot(a), slot(b)),
                 Op::Asin(a) => format!("{}.asin()", slot(a)),

@@ -59,7 +59,9 @@ impl Villarceau {
 
     /// γ″ at γ (eq. 44 bis divided through).
     pub fn acceleration(&self, gamma: f64) -> f64 {
-        self.g_over_a * (-gamma.sin() + 2.0 * self.delta * gamma.sin() * gamma.cos())
+        // The engine's sine and cosine (`dual::sin_cos`), for a like-for-like benchmark.
+        let (s, c) = crate::dual::sin_cos(gamma);
+        self.g_over_a * (-s + 2.0 * self.delta * s * c)
     }
 
     /// The first integral γ′² − (2g/a)(cos γ − δ cos²γ), constant along motions (eq. 47).

@@ -114,20 +114,20 @@ fn eval_segment<T: Real>(s: &Segment, tau: T) -> (T, T, T) {
     let h0 = s.heading0_rad;
     match s.kind {
         SegmentKind::Steady => {
-            let lat = tau * (v0 * h0.cos() / EARTH_RADIUS_M) + s.latitude0_rad;
+            let lat = tau * (v0 * Real::cos(h0) / EARTH_RADIUS_M) + s.latitude0_rad;
             (lat, T::cst(v0), T::cst(h0))
         }
         SegmentKind::SpeedChange {
             acceleration_m_per_s2: a,
         } => {
             let dist = tau * v0 + tau * tau * (0.5 * a);
-            let lat = dist * (h0.cos() / EARTH_RADIUS_M) + s.latitude0_rad;
+            let lat = dist * (Real::cos(h0) / EARTH_RADIUS_M) + s.latitude0_rad;
             (lat, tau * a + v0, T::cst(h0))
         }
         SegmentKind::Turn { rate_rad_per_s: r } => {
             let h = tau * r + h0;
             // ∫ v cos(h0 + rτ) dτ = (v/r)(sin(h0 + rτ) − sin h0)
-            let lat = (h.sin() - h0.sin()) * (v0 / (r * EARTH_RADIUS_M)) + s.latitude0_rad;
+            let lat = (h.sin() - Real::sin(h0)) * (v0 / (r * EARTH_RADIUS_M)) + s.latitude0_rad;
             (lat, T::cst(v0), h)
         }
     }
@@ -135,6 +135,7 @@ fn eval_segment<T: Real>(s: &Segment, tau: T) -> (T, T, T) {
 
 /// (latitude, speed, heading) of a segment at local time τ with their first and second time
 /// derivatives, `[value, d/dτ, d²/dτ²]`: the closed forms of [`eval_segment`] differentiated.
+/// Its sines and cosines are the engine's (`Real` for f64), so both agree to the bit.
 fn eval_segment_d2(s: &Segment, tau: f64) -> [[f64; 3]; 3] {
     let v0 = s.speed0_m_per_s;
     let h0 = s.heading0_rad;
@@ -144,7 +145,7 @@ fn eval_segment_d2(s: &Segment, tau: f64) -> [[f64; 3]; 3] {
             let lat_rate = if v0 == 0.0 {
                 0.0
             } else {
-                v0 * h0.cos() / EARTH_RADIUS_M
+                v0 * Real::cos(h0) / EARTH_RADIUS_M
             };
             [
                 [tau * lat_rate + s.latitude0_rad, lat_rate, 0.0],
@@ -155,7 +156,7 @@ fn eval_segment_d2(s: &Segment, tau: f64) -> [[f64; 3]; 3] {
         SegmentKind::SpeedChange {
             acceleration_m_per_s2: a,
         } => {
-            let k = h0.cos() / EARTH_RADIUS_M;
+            let k = Real::cos(h0) / EARTH_RADIUS_M;
             let dist = tau * v0 + tau * tau * (0.5 * a);
             let v = tau * a + v0;
             [
@@ -166,8 +167,8 @@ fn eval_segment_d2(s: &Segment, tau: f64) -> [[f64; 3]; 3] {
         }
         SegmentKind::Turn { rate_rad_per_s: r } => {
             let h = tau * r + h0;
-            let (sh, ch) = h.sin_cos();
-            let lat = (sh - h0.sin()) * (v0 / (r * EARTH_RADIUS_M)) + s.latitude0_rad;
+            let (sh, ch) = Real::sin_cos(h);
+            let lat = (sh - Real::sin(h0)) * (v0 / (r * EARTH_RADIUS_M)) + s.latitude0_rad;
             let k = v0 / EARTH_RADIUS_M;
             [[lat, ch * k, -sh * r * k], [v0, 0.0, 0.0], [h, r, 0.0]]
         }
@@ -180,7 +181,7 @@ fn sinusoid_d2(amplitude: f64, period_s: f64, phase_rad: f64, t: f64) -> [f64; 3
         return [0.0; 3];
     }
     let w = std::f64::consts::TAU / period_s;
-    let (s, c) = (t * w + phase_rad).sin_cos();
+    let (s, c) = Real::sin_cos(t * w + phase_rad);
     [amplitude * s, amplitude * w * c, -amplitude * w * w * s]
 }
 

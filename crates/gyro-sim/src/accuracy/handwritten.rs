@@ -67,7 +67,7 @@ impl Foucault44Bis {
     /// ẋ = [γ̇, γ″].
     #[inline]
     pub fn rhs(&self, x: &[f64], dx: &mut [f64]) {
-        let (s, c) = (x[0] - self.offset_rad).sin_cos();
+        let (s, c) = gyro_model::sin_cos(x[0] - self.offset_rad);
         dx[0] = x[1];
         dx[1] = self.g_over_a * s * (2.0 * self.delta * c - 1.0);
     }
@@ -75,7 +75,7 @@ impl Foucault44Bis {
     /// [[0, 1], [∂γ″/∂γ, 0]] with ∂γ″/∂γ = (g/a)(−cos γ + 2δ cos 2γ).
     #[inline]
     pub fn jacobian(&self, x: &[f64], jac: &mut [f64]) {
-        let (s, c) = (x[0] - self.offset_rad).sin_cos();
+        let (s, c) = gyro_model::sin_cos(x[0] - self.offset_rad);
         jac[0] = 0.0;
         jac[1] = 1.0;
         jac[2] = self.g_over_a * (2.0 * self.delta * (c * c - s * s) - c);
@@ -355,7 +355,7 @@ impl Anschutz1906 {
                 other => return Err(format!("force {} is not hand-written", other.name())),
             }
         }
-        let (sl, cl) = latitude_rad.sin_cos();
+        let (sl, cl) = gyro_model::sin_cos(latitude_rad);
         Ok(Anschutz1906 {
             fidelity,
             frame_rate_rad_per_s: [EARTH_RATE_RAD_PER_S * cl, 0.0, EARTH_RATE_RAD_PER_S * sl],

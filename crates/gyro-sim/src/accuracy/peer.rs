@@ -26,7 +26,7 @@ impl OdeSystem for Eq44Bis {
         dx[1] = self.0.acceleration(x[0]);
     }
     fn jacobian(&mut self, _t: f64, x: &[f64], jac: &mut [f64]) -> bool {
-        let (s, c) = x[0].sin_cos();
+        let (s, c) = gyro_model::sin_cos(x[0]);
         jac.copy_from_slice(&[
             0.0,
             1.0,
