@@ -73,10 +73,11 @@ pub trait Real:
 /// sin and cos as the engine computes them: `libm` (the Rust port of musl's, from FreeBSD's
 /// msun) rather than the platform's. `f64::sin_cos` reaches glibc's `sincos` through a call
 /// that is not inlined; `libm::sincos` shares one range reduction and inlines into the caller.
-/// A whole Villarceau run (DOP853, 100 periods, where the one sin/cos pair is the right-hand
-/// side's only transcendental) took 0.91–0.92× the time with it, at rtol 5e-8, 5e-10 and
-/// 5e-12 alike (best of 30 alternated runs each); the functions alone:
-/// `cargo bench -p gyro-model --bench trig`. Both are faithfully rounded (they differ from
+/// The functions alone (`cargo bench -p gyro-model --bench trig`): 5.4 ns a pair against
+/// 8.8 ns over a 90° swing. A whole Villarceau run, where the one pair is the right-hand side's
+/// only transcendental (`cargo bench -p gyro-sim --bench handwritten`, old and new binaries
+/// alternated): 0.87× through the engine, 0.89–0.91× hand-written, the same steps; whole
+/// scenes in docs/accuracy.md ("What limits gyrolab"). Both are faithfully rounded (they differ from
 /// glibc's in the last bit for ≈ 6 % of arguments). Everything that evaluates the equations —
 /// the generic engine, the tapes, their native code and the hand-written references — uses
 /// these, so that their results agree to the bit where they did.
