@@ -258,6 +258,176 @@ impl Radau5 {
             .sum();
         (sum / self.n.max(1) as f64).sqrt()
     }
+
+    /// Newton's starting values: zero after a start or a breakpoint, else the last step's
+    /// collocation polynomial extrapolated to the stages of a step h (z, and w = T⁻¹ z).
+    fn start_values(&mut self, h: f64) {
+        if self.first {
+            for k in 0..3 {
+                self.z[k].fill(0.0);
+                self.w[k].fill(0.0);
+            }
+            return;
+        }
+        let c3q = h / self.h_old;
+        let (c1q, c2q) = (C1 * c3q, C2 * c3q);
+        let [ak1, ak2, ak3] = &self.cont;
+        for i in 0..self.n {
+            let at = |cq: f64| cq * (ak1[i] + (cq - C2M1) * (ak2[i] + (cq - C1M1) * ak3[i]));
+            let (z1, z2, z3) = (at(c1q), at(c2q), at(c3q));
+            self.z[0][i] = z1;
+            self.z[1][i] = z2;
+            self.z[2][i] = z3;
+            self.w[0][i] = TI11 * z1 + TI12 * z2 + TI13 * z3;
+            self.w[1][i] = TI21 * z1 + TI22 * z2 + TI23 * z3;
+            self.w[2][i] = TI31 * z1 + TI32 * z2 + TI33 * z3;
+        }
+    }
+
+    /// The scaled error of the converged step (ESTRAD), floored at 1e-10; after a start or a
+    /// rejection a large estimate is refined by one more right-hand side, as RADAU5 does.
+    fn error_estimate<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        te: f64,
+        x: &[f64],
+        h: f64,
+        stats: &mut SolverStats,
+    ) -> f64 {
+        let n = self.n;
+        let (hee1, hee2, hee3) = (DD1 / h, DD2 / h, DD3 / h);
+        for i in 0..n {
+            self.ez[i] = hee1 * self.z[0][i] + hee2 * self.z[1][i] + hee3 * self.z[2][i];
+            self.err_v[i] = self.ez[i] + self.f0[i];
+        }
+        lu_solve(&self.e1, n, &self.piv1, &mut self.err_v);
+        let err = self.scaled_norm(&self.err_v).max(1e-10);
+        if !(err >= 1.0 && (self.first || self.rejected)) {
+            return err;
+        }
+        for i in 0..n {
+            self.x_stage[i] = x[i] + self.err_v[i];
+        }
+        sys.rhs(te, &self.x_stage, &mut self.err_v);
+        stats.rhs_evals += 1;
+        for i in 0..n {
+            self.err_v[i] += self.ez[i];
+        }
+        lu_solve(&self.e1, n, &self.piv1, &mut self.err_v);
+        self.scaled_norm(&self.err_v).max(1e-10)
+    }
+
+    /// An accepted step: the new state x + z₃ and the collocation polynomial's coefficients
+    /// (dense output, and the next step's starting values once accepted).
+    fn store_solution(&mut self, x: &[f64]) {
+        let [z1, z2, z3] = &self.z;
+        let [k1, k2, k3] = &mut self.cont_new;
+        for i in 0..self.n {
+            self.x_new[i] = x[i] + z3[i];
+            k1[i] = (z2[i] - z3[i]) / C2M1;
+            let ak = (z1[i] - z2[i]) / C1MC2;
+            let acont3 = (ak - z1[i] / C1) / C2;
+            k2[i] = (ak - k1[i]) / C1M1;
+            k3[i] = k2[i] - acont3;
+        }
+    }
+
+    /// The simplified Newton iteration for the stage increments z, from the starting values:
+    /// the iterations taken and the last contraction θ, or the rejection (with the h to retry)
+    /// when it diverges or would not converge in the iterations left.
+    #[allow(clippy::too_many_arguments)]
+    fn newton<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        w: Window,
+        t: f64,
+        x: &[f64],
+        h: f64,
+        fnewt: f64,
+        tol: &Tolerances,
+        stats: &mut SolverStats,
+    ) -> Result<(u32, f64), Attempt> {
+        let n = self.n;
+        let (fac1, alphn, betan) = (U1 / h, ALPH / h, BETA / h);
+        self.faccon = self.faccon.max(f64::EPSILON).powf(0.8);
+        let mut theta = tol.jacobian_reuse_contraction;
+        let mut newt = 0u32;
+        let mut dynold = 0.0;
+        let mut thqold = 0.0;
+        loop {
+            if newt >= NIT {
+                return Err(self.reject(0.5 * h));
+            }
+            for (k, c) in [C1, C2, 1.0].into_iter().enumerate() {
+                for i in 0..n {
+                    self.x_stage[i] = x[i] + self.z[k][i];
+                }
+                sys.rhs(w.at(t + c * h), &self.x_stage, &mut self.z[k]);
+            }
+            stats.rhs_evals += 3;
+            let [z1, z2, z3] = &mut self.z;
+            let [w1, w2, w3] = &self.w;
+            for i in 0..n {
+                let (a1, a2, a3) = (z1[i], z2[i], z3[i]);
+                let s1 = TI11 * a1 + TI12 * a2 + TI13 * a3;
+                let s2 = TI21 * a1 + TI22 * a2 + TI23 * a3;
+                let s3 = TI31 * a1 + TI32 * a2 + TI33 * a3;
+                // SLVRAD: right-hand sides of the real and the complex system.
+                z1[i] = s1 - w1[i] * fac1;
+                z2[i] = s2 - w2[i] * alphn + w3[i] * betan;
+                z3[i] = s3 - w3[i] * alphn - w2[i] * betan;
+            }
+            lu_solve(&self.e1, n, &self.piv1, z1);
+            lu_solve_complex(&self.e2r, &self.e2i, n, &self.piv2, z2, z3);
+            newt += 1;
+            let mut dyno = 0.0;
+            for i in 0..n {
+                let s = self.scal[i];
+                dyno += (z1[i] / s).powi(2) + (z2[i] / s).powi(2) + (z3[i] / s).powi(2);
+            }
+            let dyno = (dyno / (3 * n).max(1) as f64).sqrt();
+            if !dyno.is_finite() {
+                return Err(self.reject(0.5 * h));
+            }
+            if newt > 1 && newt < NIT {
+                let thq = dyno / dynold;
+                theta = if newt == 2 {
+                    thq
+                } else {
+                    (thq * thqold).sqrt()
+                };
+                thqold = thq;
+                if theta < 0.99 {
+                    self.faccon = theta / (1.0 - theta);
+                    let left = NIT - 1 - newt;
+                    let dyth = self.faccon * dyno * theta.powi(left as i32) / fnewt;
+                    if dyth >= 1.0 {
+                        // Too slow to converge in the iterations left: retry at a smaller h.
+                        let qnewt = dyth.clamp(1e-4, 20.0);
+                        let hhfac = 0.8 * qnewt.powf(-1.0 / (4.0 + f64::from(left)));
+                        return Err(self.reject(hhfac * h));
+                    }
+                } else {
+                    return Err(self.reject(0.5 * h));
+                }
+            }
+            dynold = dyno.max(f64::EPSILON);
+            let [w1, w2, w3] = &mut self.w;
+            for i in 0..n {
+                w1[i] += z1[i];
+                w2[i] += z2[i];
+                w3[i] += z3[i];
+                let (f1, f2, f3) = (w1[i], w2[i], w3[i]);
+                z1[i] = T11 * f1 + T12 * f2 + T13 * f3;
+                z2[i] = T21 * f1 + T22 * f2 + T23 * f3;
+                z3[i] = T31 * f1 + f2;
+            }
+            if self.faccon * dyno <= fnewt {
+                break;
+            }
+        }
+        Ok((newt, theta))
+    }
 }
 
 impl Stepper for Radau5 {
@@ -323,7 +493,6 @@ impl Stepper for Radau5 {
         tol: &Tolerances,
         stats: &mut SolverStats,
     ) -> Result<Attempt, SolveError> {
-        let n = self.n;
         let itol = internal_tolerances(tol);
         let fnewt = (10.0 * f64::EPSILON / itol.rtol).max(0.03f64.min(itol.rtol.sqrt()));
         let te = w.at(t);
@@ -350,128 +519,14 @@ impl Stepper for Radau5 {
             *s = itol.atol + itol.rtol * xi.abs();
         }
 
-        // Starting values: zero, or the last collocation polynomial extrapolated.
-        if self.first {
-            for k in 0..3 {
-                self.z[k].fill(0.0);
-                self.w[k].fill(0.0);
-            }
-        } else {
-            let c3q = h / self.h_old;
-            let (c1q, c2q) = (C1 * c3q, C2 * c3q);
-            let [ak1, ak2, ak3] = &self.cont;
-            for i in 0..n {
-                let at = |cq: f64| cq * (ak1[i] + (cq - C2M1) * (ak2[i] + (cq - C1M1) * ak3[i]));
-                let (z1, z2, z3) = (at(c1q), at(c2q), at(c3q));
-                self.z[0][i] = z1;
-                self.z[1][i] = z2;
-                self.z[2][i] = z3;
-                self.w[0][i] = TI11 * z1 + TI12 * z2 + TI13 * z3;
-                self.w[1][i] = TI21 * z1 + TI22 * z2 + TI23 * z3;
-                self.w[2][i] = TI31 * z1 + TI32 * z2 + TI33 * z3;
-            }
-        }
+        self.start_values(h);
 
-        // Simplified Newton iteration.
-        let (fac1, alphn, betan) = (U1 / h, ALPH / h, BETA / h);
-        self.faccon = self.faccon.max(f64::EPSILON).powf(0.8);
-        let mut theta = tol.jacobian_reuse_contraction;
-        let mut newt = 0u32;
-        let mut dynold = 0.0;
-        let mut thqold = 0.0;
-        loop {
-            if newt >= NIT {
-                return Ok(self.reject(0.5 * h));
-            }
-            for (k, c) in [C1, C2, 1.0].into_iter().enumerate() {
-                for i in 0..n {
-                    self.x_stage[i] = x[i] + self.z[k][i];
-                }
-                sys.rhs(w.at(t + c * h), &self.x_stage, &mut self.z[k]);
-            }
-            stats.rhs_evals += 3;
-            let [z1, z2, z3] = &mut self.z;
-            let [w1, w2, w3] = &self.w;
-            for i in 0..n {
-                let (a1, a2, a3) = (z1[i], z2[i], z3[i]);
-                let s1 = TI11 * a1 + TI12 * a2 + TI13 * a3;
-                let s2 = TI21 * a1 + TI22 * a2 + TI23 * a3;
-                let s3 = TI31 * a1 + TI32 * a2 + TI33 * a3;
-                // SLVRAD: right-hand sides of the real and the complex system.
-                z1[i] = s1 - w1[i] * fac1;
-                z2[i] = s2 - w2[i] * alphn + w3[i] * betan;
-                z3[i] = s3 - w3[i] * alphn - w2[i] * betan;
-            }
-            lu_solve(&self.e1, n, &self.piv1, z1);
-            lu_solve_complex(&self.e2r, &self.e2i, n, &self.piv2, z2, z3);
-            newt += 1;
-            let mut dyno = 0.0;
-            for i in 0..n {
-                let s = self.scal[i];
-                dyno += (z1[i] / s).powi(2) + (z2[i] / s).powi(2) + (z3[i] / s).powi(2);
-            }
-            let dyno = (dyno / (3 * n).max(1) as f64).sqrt();
-            if !dyno.is_finite() {
-                return Ok(self.reject(0.5 * h));
-            }
-            if newt > 1 && newt < NIT {
-                let thq = dyno / dynold;
-                theta = if newt == 2 {
-                    thq
-                } else {
-                    (thq * thqold).sqrt()
-                };
-                thqold = thq;
-                if theta < 0.99 {
-                    self.faccon = theta / (1.0 - theta);
-                    let left = NIT - 1 - newt;
-                    let dyth = self.faccon * dyno * theta.powi(left as i32) / fnewt;
-                    if dyth >= 1.0 {
-                        // Too slow to converge in the iterations left: retry at a smaller h.
-                        let qnewt = dyth.clamp(1e-4, 20.0);
-                        let hhfac = 0.8 * qnewt.powf(-1.0 / (4.0 + f64::from(left)));
-                        return Ok(self.reject(hhfac * h));
-                    }
-                } else {
-                    return Ok(self.reject(0.5 * h));
-                }
-            }
-            dynold = dyno.max(f64::EPSILON);
-            let [w1, w2, w3] = &mut self.w;
-            for i in 0..n {
-                w1[i] += z1[i];
-                w2[i] += z2[i];
-                w3[i] += z3[i];
-                let (f1, f2, f3) = (w1[i], w2[i], w3[i]);
-                z1[i] = T11 * f1 + T12 * f2 + T13 * f3;
-                z2[i] = T21 * f1 + T22 * f2 + T23 * f3;
-                z3[i] = T31 * f1 + f2;
-            }
-            if self.faccon * dyno <= fnewt {
-                break;
-            }
-        }
+        let (newt, theta) = match self.newton(sys, w, t, x, h, fnewt, tol, stats) {
+            Ok(done) => done,
+            Err(rejected) => return Ok(rejected),
+        };
 
-        // Error estimate (ESTRAD).
-        let (hee1, hee2, hee3) = (DD1 / h, DD2 / h, DD3 / h);
-        for i in 0..n {
-            self.ez[i] = hee1 * self.z[0][i] + hee2 * self.z[1][i] + hee3 * self.z[2][i];
-            self.err_v[i] = self.ez[i] + self.f0[i];
-        }
-        lu_solve(&self.e1, n, &self.piv1, &mut self.err_v);
-        let mut err = self.scaled_norm(&self.err_v).max(1e-10);
-        if err >= 1.0 && (self.first || self.rejected) {
-            for i in 0..n {
-                self.x_stage[i] = x[i] + self.err_v[i];
-            }
-            sys.rhs(te, &self.x_stage, &mut self.err_v);
-            stats.rhs_evals += 1;
-            for i in 0..n {
-                self.err_v[i] += self.ez[i];
-            }
-            lu_solve(&self.e1, n, &self.piv1, &mut self.err_v);
-            err = self.scaled_norm(&self.err_v).max(1e-10);
-        }
+        let err = self.error_estimate(sys, te, x, h, stats);
         if !err.is_finite() {
             return Ok(self.reject(0.2 * h));
         }
@@ -490,16 +545,7 @@ impl Stepper for Radau5 {
             }
             self.previous = Some((h, err.max(1e-2)));
             self.first = false;
-            let [z1, z2, z3] = &self.z;
-            let [k1, k2, k3] = &mut self.cont_new;
-            for i in 0..n {
-                self.x_new[i] = x[i] + z3[i];
-                k1[i] = (z2[i] - z3[i]) / C2M1;
-                let ak = (z1[i] - z2[i]) / C1MC2;
-                let acont3 = (ak - z1[i] / C1) / C2;
-                k2[i] = (ak - k1[i]) / C1M1;
-                k3[i] = k2[i] - acont3;
-            }
+            self.store_solution(x);
             self.h_new_accepted = h;
             if self.rejected {
                 h_new = h_new.min(h);
