@@ -173,10 +173,10 @@ fn print_study() {
 #[ignore = "measurement for analysis/bench/peer.py"]
 fn peer_side() {
     let opts = StudyOptions {
-        // Three a decade, as peer.py's TOLS: 1, 5, 2 × 10^-k down to 1e-12.
-        tolerances: (4..=12)
+        // Three a decade, as peer.py's TOLS: 1, 5, 2 × 10^-k from 1e-3 down to 1e-12.
+        tolerances: (3..=12)
             .flat_map(|k| [1.0, 0.5, 0.2].map(|m| m * 10f64.powi(-k)))
-            .take(25)
+            .take(28)
             .collect(),
         min_timing_s: 0.2,
         max_repeats: 5,
