@@ -56,11 +56,11 @@ pub(crate) fn lu_decompose(a: &mut [f64], n: usize, piv: &mut [usize]) -> bool {
 /// remaining row at once: independent updates, not one chain). The back substitution multiplies
 /// by the reciprocal pivots the factorisation stores, so no division sits on its chain. Against
 /// the textbook row-oriented form with divisions the results differ by rounding only (the unit
-/// test below holds both to it); the solver harness's steps and RHS calls moved by under 0.5 %, the
-/// regression baseline's by one step in 59 (`run-north-30kn`) and under 0.7 % elsewhere. Measured (2026-12-06, in-process best of repeated runs
-/// over ≥ 0.3 s, old and new alternated twice, `accuracy::peer_report` at rtol 1e-4/1e-6/1e-8):
-/// RODAS4 on the 4-state Anschütz 0.84–0.86×, on the engine's 8-state linear one 0.80–0.82×;
-/// RADAU5 0.94–0.97× and 0.86–0.91×.
+/// test below holds both to it); the solver harness's steps and RHS calls moved by under 0.5 %,
+/// the regression baseline's by one step in 59 (`run-north-30kn`) and under 0.7 % elsewhere.
+/// Measured (2026-12-06, in-process best of repeated runs over ≥ 0.3 s, old and new alternated
+/// twice, `accuracy::peer_report` at rtol 1e-4/1e-6/1e-8): RODAS4 on the 4-state Anschütz
+/// 0.84–0.86×, on the engine's 8-state linear one 0.80–0.82×; RADAU5 0.94–0.97× and 0.86–0.91×.
 pub(crate) fn lu_solve(a: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
     macro_rules! sized {
         ($($k:literal)*) => {
