@@ -104,6 +104,29 @@ fn internal_tolerances(tol: &Tolerances) -> Tolerances {
     }
 }
 
+/// The tolerances RADAU5 works to and Newton's stopping bound, for one pair of user tolerances.
+#[derive(Clone, Copy)]
+struct Internal {
+    /// The user's (rtol, atol) these were computed for.
+    user: (f64, f64),
+    rtol: f64,
+    atol: f64,
+    /// Newton's bound: max(10 eps/rtol', min(0.03, √rtol')).
+    fnewt: f64,
+}
+
+impl Internal {
+    fn new(tol: &Tolerances) -> Self {
+        let itol = internal_tolerances(tol);
+        Internal {
+            user: (tol.rtol, tol.atol),
+            rtol: itol.rtol,
+            atol: itol.atol,
+            fnewt: (10.0 * f64::EPSILON / itol.rtol).max(0.03f64.min(itol.rtol.sqrt())),
+        }
+    }
+}
+
 pub(crate) struct Radau5 {
     n: usize,
     /// f(t, x) at the current point; valid while `f0_current`.
@@ -147,6 +170,9 @@ pub(crate) struct Radau5 {
     rejected: bool,
     faccon: f64,
     singular_in_row: u32,
+    /// The internal tolerances of the last attempt's user tolerances (a `powf` and a square root
+    /// an attempt otherwise, for values that change only when the tolerances do).
+    internal: Option<Internal>,
     /// Gustafsson controller memory: last accepted h and error; `None` after a reset.
     previous: Option<(f64, f64)>,
     scratch: InitialStepScratch,
@@ -183,6 +209,7 @@ impl Radau5 {
             rejected: false,
             faccon: 1.0,
             singular_in_row: 0,
+            internal: None,
             previous: None,
             scratch: InitialStepScratch::new(n),
         }
@@ -493,8 +520,11 @@ impl Stepper for Radau5 {
         tol: &Tolerances,
         stats: &mut SolverStats,
     ) -> Result<Attempt, SolveError> {
-        let itol = internal_tolerances(tol);
-        let fnewt = (10.0 * f64::EPSILON / itol.rtol).max(0.03f64.min(itol.rtol.sqrt()));
+        let itol = match self.internal {
+            Some(i) if i.user == (tol.rtol, tol.atol) => i,
+            _ => *self.internal.insert(Internal::new(tol)),
+        };
+        let fnewt = itol.fnewt;
         let te = w.at(t);
         if !self.f0_current {
             sys.rhs(te, x, &mut self.f0);
