@@ -3,10 +3,15 @@
 //! in place, no allocation.
 
 /// Factor the row-major n×n matrix `a` in place into L (unit lower, below the diagonal) and U
-/// (above it, with the reciprocals of its pivots on the diagonal), with row interchanges
-/// recorded in `piv` (row k was swapped with row `piv[k]`).
+/// (above it, with the reciprocals of its pivots on the diagonal). `piv` holds 2n entries: the
+/// row interchanges (row k was swapped with row `piv[k]`), then the permutation they make (row
+/// i of the permuted matrix is row `piv[n + i]` of `a`), which the solves gather by.
 /// Returns false if a zero pivot makes the matrix singular.
 pub(crate) fn lu_decompose(a: &mut [f64], n: usize, piv: &mut [usize]) -> bool {
+    let (piv, perm) = piv.split_at_mut(n);
+    for (i, p) in perm[..n].iter_mut().enumerate() {
+        *p = i;
+    }
     for k in 0..n {
         let mut p = k;
         let mut best = a[k * n + k].abs();
@@ -22,6 +27,7 @@ pub(crate) fn lu_decompose(a: &mut [f64], n: usize, piv: &mut [usize]) -> bool {
             return false;
         }
         if p != k {
+            perm.swap(k, p);
             for j in 0..n {
                 a.swap(k * n + j, p * n + j);
             }
@@ -61,12 +67,26 @@ pub(crate) fn lu_decompose(a: &mut [f64], n: usize, piv: &mut [usize]) -> bool {
 /// Measured (2026-12-06, in-process best of repeated runs over ≥ 0.3 s, old and new alternated
 /// twice, `accuracy::peer_report` at rtol 1e-4/1e-6/1e-8): RODAS4 on the 4-state Anschütz
 /// 0.84–0.86×, on the engine's 8-state linear one 0.80–0.82×; RADAU5 0.94–0.97× and 0.86–0.91×.
+///
+/// The sized solves then still spent half their time on the row interchanges (`perf record`,
+/// RODAS4 at 5e-4 on the 4-state case: solves 31 % of the run, ≈ 22 ns for a 4 × 4 one):
+/// swapping entries of an array at indices known only at run time keeps it in memory, each swap
+/// waiting on the last one's store. They now gather the right-hand side by the permutation the
+/// factorisation records beside the interchanges, n loads with no chain between them. The
+/// values land where the swaps put them, so the results are the same to the bit. Old and new
+/// throwaway binaries alternated three times (2026-12-06, best of 10⁵ runs each): RODAS4 at 5e-4
+/// on the 4-state case 7.36–7.40 → 6.04–6.25 µs, RADAU5 at 1e-6 14.73–14.76 → 13.76–13.98 µs;
+/// the engine's 8-state linear case under RODAS4 at 2e-4 13.76–13.92 → 12.88–13.06 µs, at 2e-6
+/// 33.2–33.3 → 30.7–31.4 µs; the same steps and RHS calls.
 pub(crate) fn lu_solve(a: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
     macro_rules! sized {
         ($($k:literal)*) => {
             match n {
                 $($k => lu_solve_sized::<$k>(a, piv, b),)*
-                _ => real_substitution(a, n, piv, &mut b[..n]),
+                _ => {
+                    interchange(&piv[..n], &mut b[..n]);
+                    real_substitution(a, n, &mut b[..n]);
+                }
             }
         };
     }
@@ -74,21 +94,28 @@ pub(crate) fn lu_solve(a: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
 }
 
 /// One size's solve, on a copy of `b` in an array (a function of its own per size: inlining all
-/// sixteen into `lu_solve` measured 2–4 % slower on RADAU5).
+/// sixteen into `lu_solve` measured 2–4 % slower on RADAU5). The copy gathers `b` by the
+/// permutation: n independent loads, where the interchanges, one after another on an array
+/// indexed at run time, kept it in memory and made a chain of stores and loads (the same
+/// values in the same places either way).
 fn lu_solve_sized<const N: usize>(a: &[f64], piv: &[usize], b: &mut [f64]) {
-    let mut y = [0.0; N];
-    y.copy_from_slice(&b[..N]);
-    real_substitution(&a[..N * N], N, &piv[..N], &mut y);
+    let perm = &piv[N..2 * N];
+    let mut y: [f64; N] = std::array::from_fn(|i| b[perm[i]]);
+    real_substitution(&a[..N * N], N, &mut y);
     b[..N].copy_from_slice(&y);
 }
 
-/// Both substitutions column-oriented, the backward one multiplying by reciprocal pivots;
-/// inlined so that a fixed `n` unrolls and `b` stays in registers.
-#[inline(always)]
-fn real_substitution(a: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
-    for k in 0..n {
-        b.swap(k, piv[k]);
+/// The interchanges of `piv` applied to `b` in place, one after another (sizes above 16).
+fn interchange(piv: &[usize], b: &mut [f64]) {
+    for (k, &p) in piv.iter().enumerate() {
+        b.swap(k, p);
     }
+}
+
+/// Both substitutions column-oriented, the backward one multiplying by reciprocal pivots, on
+/// the permuted right-hand side; inlined so that a fixed `n` unrolls and `b` stays in registers.
+#[inline(always)]
+fn real_substitution(a: &[f64], n: usize, b: &mut [f64]) {
     for j in 0..n {
         let bj = b[j];
         for i in j + 1..n {
@@ -105,14 +132,18 @@ fn real_substitution(a: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
 }
 
 /// Complex counterpart of [`lu_decompose`] for the row-major n×n matrix `re + i·im`, pivoting
-/// on |re| + |im| as Hairer's `DECC` does; the diagonal holds the pivots' reciprocals. Returns
-/// false on a zero pivot.
+/// on |re| + |im| as Hairer's `DECC` does; the diagonal holds the pivots' reciprocals, `piv` the
+/// interchanges and the permutation as there. Returns false on a zero pivot.
 pub(crate) fn lu_decompose_complex(
     re: &mut [f64],
     im: &mut [f64],
     n: usize,
     piv: &mut [usize],
 ) -> bool {
+    let (piv, perm) = piv.split_at_mut(n);
+    for (i, p) in perm[..n].iter_mut().enumerate() {
+        *p = i;
+    }
     for k in 0..n {
         let mut p = k;
         let mut best = re[k * n + k].abs() + im[k * n + k].abs();
@@ -128,6 +159,7 @@ pub(crate) fn lu_decompose_complex(
             return false;
         }
         if p != k {
+            perm.swap(k, p);
             for j in 0..n {
                 re.swap(k * n + j, p * n + j);
                 im.swap(k * n + j, p * n + j);
@@ -171,14 +203,18 @@ pub(crate) fn lu_solve_complex(
         ($($k:literal)*) => {
             match n {
                 $($k => {
-                    let (mut yr, mut yi) = ([0.0; $k], [0.0; $k]);
-                    yr.copy_from_slice(&br[..$k]);
-                    yi.copy_from_slice(&bi[..$k]);
-                    complex_substitution(&re[..$k * $k], &im[..$k * $k], $k, &piv[..$k], &mut yr, &mut yi);
+                    let perm = &piv[$k..2 * $k];
+                    let mut yr: [f64; $k] = std::array::from_fn(|i| br[perm[i]]);
+                    let mut yi: [f64; $k] = std::array::from_fn(|i| bi[perm[i]]);
+                    complex_substitution(&re[..$k * $k], &im[..$k * $k], $k, &mut yr, &mut yi);
                     br[..$k].copy_from_slice(&yr);
                     bi[..$k].copy_from_slice(&yi);
                 })*
-                _ => complex_substitution(re, im, n, piv, &mut br[..n], &mut bi[..n]),
+                _ => {
+                    interchange(&piv[..n], &mut br[..n]);
+                    interchange(&piv[..n], &mut bi[..n]);
+                    complex_substitution(re, im, n, &mut br[..n], &mut bi[..n]);
+                }
             }
         };
     }
@@ -187,18 +223,7 @@ pub(crate) fn lu_solve_complex(
 
 /// The complex [`real_substitution`]: column-oriented, reciprocal pivots.
 #[inline(always)]
-fn complex_substitution(
-    re: &[f64],
-    im: &[f64],
-    n: usize,
-    piv: &[usize],
-    br: &mut [f64],
-    bi: &mut [f64],
-) {
-    for k in 0..n {
-        br.swap(k, piv[k]);
-        bi.swap(k, piv[k]);
-    }
+fn complex_substitution(re: &[f64], im: &[f64], n: usize, br: &mut [f64], bi: &mut [f64]) {
     for j in 0..n {
         let (yr, yi) = (br[j], bi[j]);
         for i in j + 1..n {
@@ -235,7 +260,7 @@ mod tests {
             b[i] = (0..3).map(|j| a0[i * 3 + j] * y[j]).sum();
         }
         let mut a = a0;
-        let mut piv = [0; 3];
+        let mut piv = [0; 6];
         assert!(lu_decompose(&mut a, 3, &mut piv));
         lu_solve(&a, 3, &piv, &mut b);
         for i in 0..3 {
@@ -342,7 +367,7 @@ mod tests {
                 entries(200 + n as u64, n * n),
             );
             let (mut a, mut re, mut im) = (a0.clone(), re0.clone(), im0.clone());
-            let (mut piv, mut pivc) = (vec![0; n], vec![0; n]);
+            let (mut piv, mut pivc) = (vec![0; 2 * n], vec![0; 2 * n]);
             assert!(lu_decompose(&mut a, n, &mut piv), "n = {n}");
             assert!(
                 lu_decompose_complex(&mut re, &mut im, n, &mut pivc),
@@ -363,9 +388,24 @@ mod tests {
                     "n = {n}, row {i}"
                 );
             }
+            // The sizes' gather by the permutation against the interchanges one by one (the
+            // path above 16): the same values, so the same bits.
+            let mut swapped = b.clone();
+            interchange(&piv[..n], &mut swapped);
+            real_substitution(&a, n, &mut swapped);
+            assert_eq!(fast, swapped, "real, n = {n}: gather against interchanges");
             let bi = entries(400 + n as u64, n);
             let (mut fr, mut fi, mut sr, mut si) = (b.clone(), bi.clone(), b.clone(), bi.clone());
             lu_solve_complex(&re, &im, n, &pivc, &mut fr, &mut fi);
+            let (mut gr, mut gi) = (b.clone(), bi.clone());
+            interchange(&pivc[..n], &mut gr);
+            interchange(&pivc[..n], &mut gi);
+            complex_substitution(&re, &im, n, &mut gr, &mut gi);
+            assert_eq!(
+                (&fr, &fi),
+                (&gr, &gi),
+                "complex, n = {n}: gather against interchanges"
+            );
             textbook_solve_complex(&re, &im, n, &pivc, &mut sr, &mut si);
             differed += usize::from(close(&fr, &sr, &format!("complex re, n = {n}")));
             differed += usize::from(close(&fi, &si, &format!("complex im, n = {n}")));
@@ -389,7 +429,7 @@ mod tests {
     #[test]
     fn reports_singular() {
         let mut a = [1.0, 2.0, 2.0, 4.0];
-        let mut piv = [0; 2];
+        let mut piv = [0; 4];
         assert!(!lu_decompose(&mut a, 2, &mut piv));
     }
 
@@ -408,7 +448,7 @@ mod tests {
             }
         }
         let (mut ar, mut ai) = (ar0, ai0);
-        let mut piv = [0; 3];
+        let mut piv = [0; 6];
         assert!(lu_decompose_complex(&mut ar, &mut ai, 3, &mut piv));
         assert_ne!(piv[0], 0, "the zero pivot must be swapped away");
         lu_solve_complex(&ar, &ai, 3, &piv, &mut br, &mut bi);

@@ -104,7 +104,7 @@ impl Rodas4 {
             jac: vec![0.0; n * n],
             jac_current: false,
             lu: vec![0.0; n * n],
-            piv: vec![0; n],
+            piv: vec![0; 2 * n],
             ak: std::array::from_fn(|_| vec![0.0; n]),
             dy: vec![0.0; n],
             x_stage: vec![0.0; n],
