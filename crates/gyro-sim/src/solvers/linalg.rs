@@ -77,7 +77,10 @@ pub(crate) fn lu_decompose(a: &mut [f64], n: usize, piv: &mut [usize]) -> bool {
 /// throwaway binaries alternated three times (2026-12-06, best of 10⁵ runs each): RODAS4 at 5e-4
 /// on the 4-state case 7.36–7.40 → 6.04–6.25 µs, RADAU5 at 1e-6 14.73–14.76 → 13.76–13.98 µs;
 /// the engine's 8-state linear case under RODAS4 at 2e-4 13.76–13.92 → 12.88–13.06 µs, at 2e-6
-/// 33.2–33.3 → 30.7–31.4 µs; the same steps and RHS calls.
+/// 33.2–33.3 → 30.7–31.4 µs; the same steps and RHS calls. Whole runs (`farm-bench`, old and new
+/// `gyrolab run` paired, medians of 9 pairs): 6 h of `rolling-intercardinal` at `full` under
+/// RODAS4 0.932× wall; `speed-change-20kn` at `full` under RADAU5 rtol 1e-8 (16 states, its time
+/// mostly the right-hand side) 1.012× (1.003–1.027), a cost not traced.
 pub(crate) fn lu_solve(a: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
     macro_rules! sized {
         ($($k:literal)*) => {
