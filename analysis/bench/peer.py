@@ -6,6 +6,9 @@ Cases (parameters read from gyrolab's own output, so both sides solve the same p
   azimuth gyroscope released at rest 90 deg from the meridian, 100 exact periods. Error: the
   phase-space distance sqrt(dgamma^2 + (dgamma'/w0)^2)/gamma0 after exactly 100 periods (the
   motion is periodic with Villarceau's exact period, computed by gyrolab's quadrature).
+  gyrolab also runs both with the first integral kept by projection every 16 steps (eq. 47 by
+  hand, Jacobi's integral through the engine: a scene's keep_jacobi_integral); SciPy's solve_ivp
+  has no projection, so its side is the same plain methods.
 - Beghin's elementary linear Anschuetz, 4 states (zeta, theta, zeta', theta') with the design's
   numbers, 1 hour; exact solution by scipy.linalg.expm (independent of gyrolab's). Error: max over
   minutes of |dzeta|, |dtheta| over the 2 deg release.
@@ -298,6 +301,11 @@ def main():
          "best", lambda p: True),
         ("engine", lambda p: p["implementation"] == "gyrolab engine",
          "best", lambda p: True),
+        # The same with the first integral kept by projection (a scene's keep_jacobi_integral).
+        ("hand-written, integral kept", lambda p: p["implementation"] == "gyrolab eq44bis kept",
+         "best", lambda p: True),
+        ("engine, integral kept", lambda p: p["implementation"] == "gyrolab engine kept",
+         "best", lambda p: True),
     ])
     rows += compare("linear Anschuetz, 4 states, 1 h", ours, sa, [
         ("hand-written", lambda p: p["implementation"] == "gyrolab 4state",
@@ -315,7 +323,7 @@ def main():
     print("\nall points (error, wall):")
     for p in ours + sv + sa + sl:
         e = "failed" if p["error"] is None else f"{p['error']:.2e}"
-        print(f"  {p['implementation']:<16} {p['method']:<7} rtol {p['rtol']:.0e}: error {e:>9}, "
+        print(f"  {p['implementation']:<21} {p['method']:<7} rtol {p['rtol']:.0e}: error {e:>9}, "
               f"{fmt(p['wall_s']):>10}, {p['rhs_evals']} rhs")
     print(f"\npeer benchmark wall time {time.perf_counter() - t0:.1f} s")
     if args.out:

@@ -276,6 +276,9 @@ pub mod run_record {
     pub const LATITUDE_DEG: &str = "latitude_deg";
     pub const RHS_COST_NS: &str = "rhs_cost_ns";
     pub const POSE_EVERY_N_SAMPLES: &str = "pose_every_n_samples";
+    /// `true` when the run kept Jacobi's integral by projection (`[simulation]
+    /// keep_jacobi_integral`); absent otherwise.
+    pub const KEEP_JACOBI_INTEGRAL: &str = "keep_jacobi_integral";
 }
 
 /// The `result` metadata record: how the run ended, written when it closes its file (absent from

@@ -295,6 +295,9 @@ pub const MAX_MOTORS: usize = 4;
 /// Most states a model has: rates and coordinates of every coordinate, and the motors' spins.
 const MAX_STATES: usize = 2 * MAX_COORDINATES + MAX_MOTORS;
 
+/// Most states whose Jacobi integral's gradient [`CompiledModel::jacobi_integral`] forms.
+const JACOBI_MAX_STATES: usize = 16;
+
 /// The base's motion as the equations take it: its rotation and rate to the world, each with
 /// its time derivative, the apparent gravity (world axes); then ġ, R̈ and ω̈, zero unless the
 /// model carries its gyros ([`crate::gyroscopic::shifted_base`] is their only reader).
@@ -395,6 +398,9 @@ pub struct CompiledModel<M: ShipMotion> {
     /// The running fidelity's Jacobian as tapes of [`tape::JET_WIDTH`] columns each, recorded
     /// at first use (explicit integrators never ask); `None` inside if not recorded.
     jacobian_tapes: OnceLock<Option<JacobianTapes>>,
+    /// Jacobi's integral and its gradient as one tape (outputs h, ∂h/∂x), recorded at first use
+    /// by [`Self::jacobi_integral`]; `None` inside for a model that does not keep the integral.
+    jacobi_tape: OnceLock<Option<Tape>>,
 }
 
 /// The running fidelity's Jacobian tapes and whether `jacobian` runs them (decided once, when
@@ -610,6 +616,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             tapes: Vec::new(),
             rhs_by_tape: false,
             jacobian_tapes: OnceLock::new(),
+            jacobi_tape: OnceLock::new(),
         };
         let mut x = model.initial_state(&opts.initial)?;
         model.classify_precessional(&x);
@@ -2208,6 +2215,135 @@ impl<M: ShipMotion> CompiledModel<M> {
             e.applied_power_w += (c_ns[i] - c_c[i]) * qd[i];
         }
         Some(e)
+    }
+
+    /// What keeps Jacobi's integral h = T₂ − T₀ + V from being a first integral of this model,
+    /// or `None` when it is one: a `full` model on a base at rest on the Earth (h then has no
+    /// explicit time and the Lagrangian is Beghin's ch. I one), with no servo, damper, applied
+    /// force, liquid or spin motor, whose forces are springs only (potential). Harbour scenes of
+    /// Foucault's gyroscope are such; every compass with a damper is not.
+    pub fn jacobi_integral_broken_by(&self) -> Option<String> {
+        if self.fidelity != Fidelity::Full {
+            return Some(format!(
+                "its `{}` fidelity (Jacobi's integral is kept in `full` only)",
+                self.fidelity
+            ));
+        }
+        if !self.is_autonomous() {
+            return Some("its moving base (the ship's motion works on the compass)".into());
+        }
+        if !self.motors.is_empty() {
+            return Some("its spin motors".into());
+        }
+        if let Some(c) = self.design.coordinates.iter().find(|c| c.servo.is_some()) {
+            return Some(format!("the servo driving `{}`", c.name));
+        }
+        if let Some(f) = self
+            .chain
+            .forces
+            .iter()
+            .find(|f| !matches!(f, Force::Spring { .. } | Force::LinkSpring { .. }))
+        {
+            return Some(format!(
+                "force `{}` (dampers, applied forces and servos are not potential)",
+                f.name()
+            ));
+        }
+        if !self.chain.pots.is_empty() || !self.chain.tanks.is_empty() {
+            return Some("its liquid (the flow between pots or compartments dissipates)".into());
+        }
+        if self.dim() > JACOBI_MAX_STATES {
+            return Some(format!(
+                "its {} states (the integral's gradient is formed for up to {JACOBI_MAX_STATES})",
+                self.dim()
+            ));
+        }
+        None
+    }
+
+    /// Jacobi's integral h = T₂ − T₀ + V (J) at (t, x) and its exact gradient ∂h/∂x into
+    /// `grad` (one pass of dual numbers along the states), for a model of which it is a first
+    /// integral ([`Self::jacobi_integral_broken_by`] is `None`; otherwise `None`). The same
+    /// energies as [`Self::energetics`]' `energy_j`, without allocating: what a projection onto
+    /// the integral's level set calls during a run.
+    pub fn jacobi_integral(&self, _t: f64, x: &[f64], grad: &mut [f64]) -> Option<f64> {
+        // The model is autonomous (else the integral is broken), so the tape takes x only.
+        let tape = self
+            .jacobi_tape
+            .get_or_init(|| self.record_jacobi())
+            .as_ref()?;
+        let dim = self.dim();
+        let mut out = [0.0; 1 + JACOBI_MAX_STATES];
+        let ok = tape.eval(&x[..dim], &mut out[..1 + dim]);
+        grad[..dim].copy_from_slice(&out[1..1 + dim]);
+        (ok && out[..1 + dim].iter().all(|v| v.is_finite())).then_some(out[0])
+    }
+
+    /// The same by the generic engine on dual numbers (what the tape is recorded from; equal
+    /// to it to the bit, `tests/tape.rs`).
+    pub fn jacobi_integral_engine(&self, x: &[f64], grad: &mut [f64]) -> Option<f64> {
+        self.jacobi_integral_broken_by().is_none().then_some(())?;
+        let dim = self.dim();
+        let mut out = [0.0; 1 + JACOBI_MAX_STATES];
+        self.jacobi_any::<f64>(x, &mut out[..1 + dim]);
+        grad[..dim].copy_from_slice(&out[1..1 + dim]);
+        out[..1 + dim]
+            .iter()
+            .all(|v| v.is_finite())
+            .then_some(out[0])
+    }
+
+    fn record_jacobi(&self) -> Option<Tape> {
+        self.jacobi_integral_broken_by().is_none().then_some(())?;
+        let at = self.x0.clone();
+        let dim = at.len();
+        Some(tape::on_large_stack(|| {
+            tape::record(&at, 1 + dim, |inp, out| self.jacobi_any::<Tr>(inp, out))
+        }))
+    }
+
+    /// h and ∂h/∂x into `out` (1 + dim entries), for any scalar (f64, or the recorder's).
+    fn jacobi_any<T: Real>(&self, x: &[T], out: &mut [T]) {
+        match self.dim() {
+            0..=2 => self.jacobi_n::<T, 2>(x, out),
+            3..=4 => self.jacobi_n::<T, 4>(x, out),
+            5..=8 => self.jacobi_n::<T, 8>(x, out),
+            _ => self.jacobi_n::<T, JACOBI_MAX_STATES>(x, out),
+        }
+    }
+
+    fn jacobi_n<T: Real, const D: usize>(&self, x: &[T], out: &mut [T]) {
+        const MX: usize = MAX_COORDINATES + 1;
+        let (n, ni) = (self.chain.n, self.independent.len());
+        let dim = 2 * ni;
+        let xs: [Jet<T, D>; D] = Jet::variables(x, dim);
+        let zero = Jet::<T, D>::zero();
+        let (mut q, mut qd) = ([zero; MX], [zero; MX]);
+        self.expand(&xs[..ni], &mut q[..n], true);
+        self.expand(&xs[ni..dim], &mut qd[..n], false);
+        let (r, w, g, ..) = self.base_at(Jet::<T, D>::cst(0.0));
+        let (mut m, mut k, mut c) = ([zero; MX * MX], [zero; MX * MX], [zero; MX]);
+        let inp = EvalInput {
+            q: &q[..n],
+            qd: &qd[..n],
+            u: &qd[..n],
+            drop_quadratic: &[],
+            spin_momentum: &self.spin_momentum,
+            world_from_base: &r,
+            base_rate: &w,
+            gravity: g,
+        };
+        let mut eo = EvalOutput {
+            m: &mut m[..n * n],
+            k: &mut k[..n * n],
+            c: &mut c[..n],
+            energies: [zero; 3],
+        };
+        evaluate_any(&self.chain, &inp, &mut eo);
+        let [t2, t0, v] = eo.energies;
+        let h = t2 - t0 + v;
+        out[0] = h.v;
+        out[1..1 + dim].copy_from_slice(&h.d[..dim]);
     }
 
     /// Whether `gyroscopic` fidelity runs the carried reduction here ([`crate::gyroscopic`]:

@@ -725,6 +725,10 @@ fn run_metadata(
         ),
     ]
     .into_iter()
+    .chain(
+        sim.keep_jacobi_integral
+            .then(|| (run_record::KEEP_JACOBI_INTEGRAL, "true".to_string())),
+    )
     .map(|(k, v)| (k.to_string(), v))
     .collect()
 }

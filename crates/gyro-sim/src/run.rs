@@ -4,7 +4,9 @@
 
 use crate::program::{Segment, ShipProgram};
 use crate::scene::Scene;
-use crate::solvers::{self, OdeSystem, OutputGrid, SolveError, SolverStats, StopReason};
+use crate::solvers::{
+    self, OdeSystem, OutputGrid, SolveError, SolverStats, StopReason, Tolerances,
+};
 use gyro_model::{CompiledModel, Fidelity, ModelError, ShipMotion};
 use std::cell::Cell;
 use std::fmt;
@@ -16,6 +18,8 @@ pub struct Simulation {
     pub model: CompiledModel<ShipProgram>,
     pub grid: OutputGrid,
     pub breakpoints: Vec<f64>,
+    /// Runs project onto Jacobi's integral ([`JacobiKeeper`]).
+    pub keep_jacobi_integral: bool,
 }
 
 #[derive(Debug)]
@@ -145,6 +149,7 @@ pub trait RunObserver {
 struct CountingSystem<'a> {
     inner: ModelSystem<'a>,
     counts: &'a Counts,
+    keeper: Option<JacobiKeeper>,
 }
 
 impl OdeSystem for CountingSystem<'_> {
@@ -176,6 +181,110 @@ impl OdeSystem for CountingSystem<'_> {
     fn is_autonomous(&self) -> bool {
         self.inner.is_autonomous()
     }
+    fn projects(&self) -> bool {
+        self.keeper.is_some()
+    }
+    fn project(&mut self, t: f64, x: &mut [f64], tol: &Tolerances) -> bool {
+        match &mut self.keeper {
+            Some(k) => k.project(self.inner.model, t, x, tol),
+            None => false,
+        }
+    }
+}
+
+/// Keeps a model's Jacobi integral h = T₂ − T₀ + V at its starting value: after an accepted
+/// step, one Newton step along the integral's gradient in the metric of the step's error
+/// control, x ← x − λ·W∇h with W = diag(sk²), sk = atol + rtol·|x| and λ = (h(x) − h₀)/(∇hᵀW∇h):
+/// the least move, as the error control measures moves, that puts x back on the level set
+/// (to second order in a drift of the size of a few local errors). The exact solution keeps h,
+/// so this removes the component of the integrators' error that grows fastest: a drift of h is
+/// a drift of the period, and its phase error grows as the square of time. Hairer, Lubich &
+/// Wanner, *Geometric Numerical Integration*, IV.4 (standard projection).
+pub struct JacobiKeeper {
+    h0: f64,
+    grad: Vec<f64>,
+}
+
+impl JacobiKeeper {
+    /// The integral at (t0, x0); an error when the model does not keep it.
+    pub fn new(
+        model: &gyro_model::CompiledModel<ShipProgram>,
+        t0: f64,
+        x0: &[f64],
+    ) -> Result<JacobiKeeper, SolveError> {
+        if let Some(why) = model.jacobi_integral_broken_by() {
+            return Err(SolveError::InvalidOptions(format!(
+                "Jacobi's integral is not a first integral of this model ({why})"
+            )));
+        }
+        let mut grad = vec![0.0; x0.len()];
+        let h0 = model.jacobi_integral(t0, x0, &mut grad).ok_or_else(|| {
+            SolveError::InvalidOptions("Jacobi's integral is not finite at the start".into())
+        })?;
+        Ok(JacobiKeeper { h0, grad })
+    }
+
+    /// The integral's value at the start, J.
+    pub fn value(&self) -> f64 {
+        self.h0
+    }
+
+    /// Projects `x` onto h = h₀ (see the type); whether it moved it.
+    pub fn project(
+        &mut self,
+        model: &gyro_model::CompiledModel<ShipProgram>,
+        t: f64,
+        x: &mut [f64],
+        tol: &Tolerances,
+    ) -> bool {
+        match model.jacobi_integral(t, x, &mut self.grad) {
+            Some(h) => solvers::project_onto_level(x, &self.grad, h, self.h0, tol),
+            None => false,
+        }
+    }
+}
+
+/// [`ModelSystem`] with its Jacobi integral kept ([`JacobiKeeper`]): what a scene with
+/// `keep_jacobi_integral` runs, for callers of [`solvers::integrate`] that drive the model
+/// themselves (the accuracy study, the peer benchmark).
+pub struct KeptModelSystem<'a> {
+    pub inner: ModelSystem<'a>,
+    keeper: JacobiKeeper,
+}
+
+impl<'a> KeptModelSystem<'a> {
+    /// The integral taken at (t0, x0); an error when the model does not keep it.
+    pub fn new(
+        model: &'a CompiledModel<ShipProgram>,
+        t0: f64,
+        x0: &[f64],
+    ) -> Result<Self, SolveError> {
+        Ok(KeptModelSystem {
+            inner: ModelSystem { model },
+            keeper: JacobiKeeper::new(model, t0, x0)?,
+        })
+    }
+}
+
+impl OdeSystem for KeptModelSystem<'_> {
+    fn dim(&self) -> usize {
+        self.inner.dim()
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dxdt: &mut [f64]) {
+        self.inner.rhs(t, x, dxdt);
+    }
+    fn jacobian(&mut self, t: f64, x: &[f64], jac: &mut [f64]) -> bool {
+        self.inner.jacobian(t, x, jac)
+    }
+    fn is_autonomous(&self) -> bool {
+        self.inner.is_autonomous()
+    }
+    fn projects(&self) -> bool {
+        true
+    }
+    fn project(&mut self, t: f64, x: &mut [f64], tol: &Tolerances) -> bool {
+        self.keeper.project(self.inner.model, t, x, tol)
+    }
 }
 
 impl Simulation {
@@ -192,10 +301,20 @@ impl Simulation {
             t_end: scene.duration_s,
         };
         let breakpoints = scene.program.breakpoints();
+        if scene.keep_jacobi_integral
+            && let Some(why) = model.jacobi_integral_broken_by()
+        {
+            return Err(RunError::Model(ModelError::Invalid(format!(
+                "`simulation.keep_jacobi_integral`: Jacobi's integral is not a first integral of \
+                 this model, because of {why} (allowed for a `full` model at rest, without servo, \
+                 damper, applied force or liquid)"
+            ))));
+        }
         Ok(Simulation {
             model,
             grid,
             breakpoints,
+            keep_jacobi_integral: scene.keep_jacobi_integral,
         })
     }
 
@@ -231,9 +350,15 @@ impl Simulation {
         if self.model.fidelity == Fidelity::Linear && self.model.is_autonomous() {
             return Ok(self.run_linear_exact(&mut x, observe));
         }
+        let keeper = if self.keep_jacobi_integral {
+            Some(JacobiKeeper::new(&self.model, self.grid.t0, &x).map_err(RunError::Solve)?)
+        } else {
+            None
+        };
         let mut sys = CountingSystem {
             inner: ModelSystem { model: &self.model },
             counts: &counts,
+            keeper,
         };
         let (stop, solver) = solvers::integrate(
             &mut sys,

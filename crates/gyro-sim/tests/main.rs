@@ -12,6 +12,7 @@ mod engine_agreement;
 mod handwritten;
 mod hard_cases;
 mod interop_recording;
+mod jacobi;
 mod modes_and_stiffness;
 mod native_code;
 mod record_stats;

@@ -89,6 +89,12 @@ impl<S: OdeSystem> OdeSystem for Budget<S> {
     fn is_autonomous(&self) -> bool {
         self.inner.is_autonomous()
     }
+    fn projects(&self) -> bool {
+        self.inner.projects()
+    }
+    fn project(&mut self, t: f64, x: &mut [f64], tol: &Tolerances) -> bool {
+        self.inner.project(t, x, tol)
+    }
 }
 
 impl Case {

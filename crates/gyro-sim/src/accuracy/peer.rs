@@ -7,15 +7,17 @@ use super::problems::{
     Anschutz4, HOURS, LinearSystem, anschutz_text, exact_linear, foucault_release, scene,
 };
 use crate::Simulation;
-use crate::run::ModelSystem;
+use crate::run::{KeptModelSystem, ModelSystem};
 use crate::solvers::{self, Method, OdeSystem, OutputGrid, SolverStats, Tolerances};
 use gyro_model::theory::Villarceau;
 use serde::Serialize;
 use std::ops::ControlFlow;
 
-/// Villarceau's eq. 44 bis written by hand: γ″ = (g/a)(−sin γ + 2δ sin γ cos γ), state (γ, γ′).
+/// Villarceau's eq. 44 bis written by hand: γ″ = (g/a)(−sin γ + 2δ sin γ cos γ), state (γ, γ′);
+/// with `Some(I₀)`, its first integral (eq. 47) kept at I₀ by projection, as a scene's
+/// `keep_jacobi_integral` keeps the engine's.
 #[derive(Clone, Copy, Debug)]
-struct Eq44Bis(Villarceau);
+struct Eq44Bis(Villarceau, Option<f64>);
 
 impl OdeSystem for Eq44Bis {
     fn dim(&self) -> usize {
@@ -38,6 +40,18 @@ impl OdeSystem for Eq44Bis {
     fn is_autonomous(&self) -> bool {
         true
     }
+    fn projects(&self) -> bool {
+        self.1.is_some()
+    }
+    fn project(&mut self, _t: f64, x: &mut [f64], tol: &Tolerances) -> bool {
+        let Some(target) = self.1 else {
+            return false;
+        };
+        // I = γ′² − (2g/a)(cos γ − δ cos²γ): ∂I/∂γ = −2γ″, ∂I/∂γ′ = 2γ′.
+        let grad = [-2.0 * self.0.acceleration(x[0]), 2.0 * x[1]];
+        let value = self.0.first_integral(x[0], x[1]);
+        solvers::project_onto_level(x, &grad, value, target, tol)
+    }
 }
 
 /// One peer measurement.
@@ -45,7 +59,8 @@ impl OdeSystem for Eq44Bis {
 pub struct PeerPoint {
     /// `gyrolab eq44bis` (hand-written), `gyrolab engine` (the Lagrangian engine's model),
     /// `gyrolab 4state` (Beghin's 4-state Anschütz, hand-written), `gyrolab engine-linear` (the
-    /// engine's `linear` Anschütz 1906).
+    /// engine's `linear` Anschütz 1906); `… kept`: the same with the first integral (eq. 47,
+    /// Jacobi's integral for the engine) kept by projection.
     pub implementation: String,
     pub method: String,
     pub rtol: f64,
@@ -148,6 +163,8 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
         atol_factor: 1e-4,
     };
     let exact_lin = exact_linear(&lin_peer.a, lin_peer.n, &lin_peer.y0, &lin.grid);
+    // The kept rows' system, checked once (the runs below build it afresh, as a run would).
+    KeptModelSystem::new(&sim.model, 0.0, &sim.model.x0).map_err(|e| setup(e.to_string()))?;
     let mut points = Vec::new();
     for &rtol in &opts.tolerances {
         let tol = Tolerances {
@@ -174,7 +191,7 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
             points.push(end_state_point(
                 opts,
                 "gyrolab eq44bis",
-                || Eq44Bis(v),
+                || Eq44Bis(v, None),
                 &[amplitude, 0.0],
                 method,
                 &tol,
@@ -188,6 +205,34 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
                     opts,
                     "gyrolab engine",
                     || ModelSystem { model: &sim.model },
+                    &sim.model.x0,
+                    method,
+                    &tol,
+                    &grid,
+                    &end_error,
+                ));
+            }
+            // Both with the first integral kept by projection (DOP853, the explicit method
+            // these rows choose).
+            if method == Method::Dop853 {
+                let i0 = v.first_integral(amplitude, 0.0);
+                points.push(end_state_point(
+                    opts,
+                    "gyrolab eq44bis kept",
+                    || Eq44Bis(v, Some(i0)),
+                    &[amplitude, 0.0],
+                    method,
+                    &tol,
+                    &grid,
+                    &end_error,
+                ));
+                points.push(end_state_point(
+                    opts,
+                    "gyrolab engine kept",
+                    || {
+                        KeptModelSystem::new(&sim.model, 0.0, &sim.model.x0)
+                            .expect("Foucault's gyroscope at rest keeps Jacobi's integral")
+                    },
                     &sim.model.x0,
                     method,
                     &tol,

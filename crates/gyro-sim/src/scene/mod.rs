@@ -84,6 +84,9 @@ pub struct Scene {
     pub pose_rate_hz: f64,
     /// Whether the run records `/compass/energy`.
     pub record_energy: bool,
+    /// Whether the run keeps Jacobi's integral by projection (`[simulation]
+    /// keep_jacobi_integral`).
+    pub keep_jacobi_integral: bool,
     /// The scene file's text (recorded with every run).
     pub source_text: String,
     pub source_path: String,
@@ -173,6 +176,7 @@ impl Scene {
             pivot_m: c.pivot_m,
             pose_rate_hz: pose_rate,
             record_energy: sim.record_energy,
+            keep_jacobi_integral: sim.keep_jacobi_integral,
             source_text: text.to_string(),
             source_path: file.to_string(),
         })

@@ -44,6 +44,13 @@ pub(super) struct SimulationFile {
     /// every sample: three reference-engine passes per sample, so only when asked.
     #[serde(default)]
     pub(super) record_energy: bool,
+    /// Project the state back onto Jacobi's integral h = T₂ − T₀ + V every few steps
+    /// (`gyro_sim::solvers::PROJECTION_INTERVAL`): for a conservative `full` model on a base at
+    /// rest (a harbour scene of Foucault's gyroscope), where the integrators' drift of h is what
+    /// grows the phase error of a long run. Refused, with the reason, for a model that does not
+    /// keep h.
+    #[serde(default)]
+    pub(super) keep_jacobi_integral: bool,
 }
 
 impl Default for SimulationFile {
@@ -60,6 +67,7 @@ impl Default for SimulationFile {
             disable_effects: Vec::new(),
             pose_rate_hz: None,
             record_energy: false,
+            keep_jacobi_integral: false,
         }
     }
 }

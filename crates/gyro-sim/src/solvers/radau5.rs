@@ -602,6 +602,10 @@ impl Stepper for Radau5 {
         &self.x_new
     }
 
+    fn x_new_mut(&mut self) -> &mut [f64] {
+        &mut self.x_new
+    }
+
     fn dense(&self, _x_old: &[f64], theta: f64, _h: f64, out: &mut [f64]) {
         // CONTR5, with s = θ − 1 measured from the end of the step.
         let s = theta - 1.0;

@@ -97,6 +97,21 @@ impl Stepper for Rk4 {
         &self.x_new
     }
 
+    fn x_new_mut(&mut self) -> &mut [f64] {
+        &mut self.x_new
+    }
+
+    fn refresh_end<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        w: Window,
+        t_new: f64,
+        stats: &mut SolverStats,
+    ) {
+        sys.rhs(w.at(t_new), &self.x_new, &mut self.k[4]);
+        stats.rhs_evals += 1;
+    }
+
     fn dense(&self, x_old: &[f64], theta: f64, h: f64, out: &mut [f64]) {
         let (f0, f1) = (&self.k[0], &self.k[4]);
         for i in 0..out.len() {

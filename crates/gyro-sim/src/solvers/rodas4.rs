@@ -343,6 +343,10 @@ impl Stepper for Rodas4 {
         &self.x_new
     }
 
+    fn x_new_mut(&mut self) -> &mut [f64] {
+        &mut self.x_new
+    }
+
     fn prepare_dense<S: OdeSystem>(
         &mut self,
         _sys: &mut S,
