@@ -296,7 +296,7 @@ pub const MAX_MOTORS: usize = 4;
 const MAX_STATES: usize = 2 * MAX_COORDINATES + MAX_MOTORS;
 
 /// Most states whose Jacobi integral's gradient [`CompiledModel::jacobi_integral`] forms.
-const JACOBI_MAX_STATES: usize = 16;
+const JACOBI_MAX_STATES: usize = 8;
 
 /// The base's motion as the equations take it: its rotation and rate to the world, each with
 /// its time derivative, the apparent gravity (world axes); then ġ, R̈ and ω̈, zero unless the
@@ -2262,7 +2262,8 @@ impl<M: ShipMotion> CompiledModel<M> {
     }
 
     /// Jacobi's integral h = T₂ − T₀ + V (J) at (t, x) and its exact gradient ∂h/∂x into
-    /// `grad` (one pass of dual numbers along the states), for a model of which it is a first
+    /// `grad` (the engine's energies on dual numbers along the states, recorded once as a tape),
+    /// for a model of which it is a first
     /// integral ([`Self::jacobi_integral_broken_by`] is `None`; otherwise `None`). The same
     /// energies as [`Self::energetics`]' `energy_j`, without allocating: what a projection onto
     /// the integral's level set calls during a run.
@@ -2279,41 +2280,23 @@ impl<M: ShipMotion> CompiledModel<M> {
         (ok && out[..1 + dim].iter().all(|v| v.is_finite())).then_some(out[0])
     }
 
-    /// The same by the generic engine on dual numbers (what the tape is recorded from; equal
-    /// to it to the bit, `tests/tape.rs`).
-    pub fn jacobi_integral_engine(&self, x: &[f64], grad: &mut [f64]) -> Option<f64> {
-        self.jacobi_integral_broken_by().is_none().then_some(())?;
-        let dim = self.dim();
-        let mut out = [0.0; 1 + JACOBI_MAX_STATES];
-        self.jacobi_any::<f64>(x, &mut out[..1 + dim]);
-        grad[..dim].copy_from_slice(&out[1..1 + dim]);
-        out[..1 + dim]
-            .iter()
-            .all(|v| v.is_finite())
-            .then_some(out[0])
-    }
-
     fn record_jacobi(&self) -> Option<Tape> {
         self.jacobi_integral_broken_by().is_none().then_some(())?;
         let at = self.x0.clone();
         let dim = at.len();
         Some(tape::on_large_stack(|| {
-            tape::record(&at, 1 + dim, |inp, out| self.jacobi_any::<Tr>(inp, out))
+            tape::record(&at, 1 + dim, |inp, out| self.jacobi_n(inp, out))
         }))
     }
 
-    /// h and ∂h/∂x into `out` (1 + dim entries), for any scalar (f64, or the recorder's).
-    fn jacobi_any<T: Real>(&self, x: &[T], out: &mut [T]) {
-        match self.dim() {
-            0..=2 => self.jacobi_n::<T, 2>(x, out),
-            3..=4 => self.jacobi_n::<T, 4>(x, out),
-            5..=8 => self.jacobi_n::<T, 8>(x, out),
-            _ => self.jacobi_n::<T, JACOBI_MAX_STATES>(x, out),
-        }
-    }
-
-    fn jacobi_n<T: Real, const D: usize>(&self, x: &[T], out: &mut [T]) {
+    /// h and ∂h/∂x into `out` (1 + dim entries), recorded: one width of dual numbers and one
+    /// scalar only, since every method of the model is compiled where the model's motion type is
+    /// (in gyro-sim), and each width × scalar × chain size is a copy of the engine (four widths
+    /// and two scalars made gyro-sim's library take ≈ 20 min to build).
+    fn jacobi_n(&self, x: &[Tr], out: &mut [Tr]) {
         const MX: usize = MAX_COORDINATES + 1;
+        const D: usize = JACOBI_MAX_STATES;
+        type T = Tr;
         let (n, ni) = (self.chain.n, self.independent.len());
         let dim = 2 * ni;
         let xs: [Jet<T, D>; D] = Jet::variables(x, dim);

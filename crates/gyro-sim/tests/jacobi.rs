@@ -1,6 +1,6 @@
 //! Jacobi's integral kept by projection (`[simulation] keep_jacobi_integral`): the integral's
-//! tape against the engine and the energy balance, the phase error of a long conservative run
-//! with and without the projection, and the models that refuse it.
+//! tape against the energy balance (value and central differences), the phase error of a long
+//! conservative run with and without the projection, and the models that refuse it.
 
 use crate::support;
 use gyro_sim::accuracy::foucault_release_scene;
@@ -26,7 +26,7 @@ fn release(deg: f64, keep: bool) -> (Simulation, gyro_model::theory::Villarceau)
 }
 
 #[test]
-fn the_integrals_tape_equals_the_engine_and_the_energy_balance() {
+fn the_integrals_tape_agrees_with_the_energy_balance() {
     let (sim, _) = release(90.0, false);
     let m = &sim.model;
     assert!(m.jacobi_integral_broken_by().is_none());
@@ -36,17 +36,8 @@ fn the_integrals_tape_equals_the_engine_and_the_energy_balance() {
         .enumerate()
     {
         let x = &x[..n];
-        let (mut g_tape, mut g_engine) = (vec![0.0; n], vec![0.0; n]);
+        let mut g_tape = vec![0.0; n];
         let h_tape = m.jacobi_integral(0.0, x, &mut g_tape).expect("finite");
-        let h_engine = m.jacobi_integral_engine(x, &mut g_engine).expect("finite");
-        assert_eq!(h_tape.to_bits(), h_engine.to_bits(), "state {k}");
-        for (a, b) in g_tape.iter().zip(&g_engine) {
-            assert_eq!(
-                a.to_bits(),
-                b.to_bits(),
-                "state {k}: gradient {g_tape:?} vs {g_engine:?}"
-            );
-        }
         // The value is the energy balance's h; the gradient its central difference.
         let bal = m.energetics(0.0, x).expect("regular");
         let e = bal.energy_j;
