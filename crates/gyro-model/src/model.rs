@@ -2263,10 +2263,9 @@ impl<M: ShipMotion> CompiledModel<M> {
 
     /// Jacobi's integral h = T₂ − T₀ + V (J) at (t, x) and its exact gradient ∂h/∂x into
     /// `grad` (the engine's energies on dual numbers along the states, recorded once as a tape),
-    /// for a model of which it is a first
-    /// integral ([`Self::jacobi_integral_broken_by`] is `None`; otherwise `None`). The same
-    /// energies as [`Self::energetics`]' `energy_j`, without allocating: what a projection onto
-    /// the integral's level set calls during a run.
+    /// for a model of which it is a first integral ([`Self::jacobi_integral_broken_by`] is
+    /// `None`; otherwise `None`). The same energies as [`Self::energetics`]' `energy_j`, without
+    /// allocating after the first call: what a projection onto the level set calls in a run.
     pub fn jacobi_integral(&self, _t: f64, x: &[f64], grad: &mut [f64]) -> Option<f64> {
         // The model is autonomous (else the integral is broken), so the tape takes x only.
         let tape = self

@@ -224,11 +224,6 @@ impl JacobiKeeper {
         Ok(JacobiKeeper { h0, grad })
     }
 
-    /// The integral's value at the start, J.
-    pub fn value(&self) -> f64 {
-        self.h0
-    }
-
     /// Projects `x` onto h = h₀ (see the type); whether it moved it.
     pub fn project(
         &mut self,

@@ -139,7 +139,6 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
     let (sim, v, _) = foucault_release(90.0, amplitude).map_err(setup)?;
     let period = v.period(amplitude);
     let t_end = PEER_PERIODS * period;
-    let w0 = v.g_over_a.abs().sqrt();
     let atol_factor = 1e-3;
     let a4 = Anschutz4::from_design().map_err(setup)?;
     let a4m = a4.matrix();
@@ -179,67 +178,9 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
             Method::Radau5,
         ] {
             let implicit = matches!(method, Method::Rodas4 | Method::Radau5);
-            let end_error = |last: &[f64], x0: &[f64]| {
-                (last[0] - x0[0]).hypot((last[1] - x0[1]) / w0) / amplitude
-            };
-            let grid = OutputGrid {
-                t0: 0.0,
-                dt: t_end,
-                t_end,
-            };
-            // Hand-written eq. 44 bis.
-            points.push(end_state_point(
-                opts,
-                "gyrolab eq44bis",
-                || Eq44Bis(v, None),
-                &[amplitude, 0.0],
-                method,
-                &tol,
-                &grid,
-                &end_error,
+            points.extend(villarceau_points(
+                opts, &sim, v, amplitude, t_end, method, &tol,
             ));
-            // The engine (explicit methods only: the implicit ones' AD Jacobian is not the point
-            // here).
-            if !implicit {
-                points.push(end_state_point(
-                    opts,
-                    "gyrolab engine",
-                    || ModelSystem { model: &sim.model },
-                    &sim.model.x0,
-                    method,
-                    &tol,
-                    &grid,
-                    &end_error,
-                ));
-            }
-            // Both with the first integral kept by projection (DOP853, the explicit method
-            // these rows choose).
-            if method == Method::Dop853 {
-                let i0 = v.first_integral(amplitude, 0.0);
-                points.push(end_state_point(
-                    opts,
-                    "gyrolab eq44bis kept",
-                    || Eq44Bis(v, Some(i0)),
-                    &[amplitude, 0.0],
-                    method,
-                    &tol,
-                    &grid,
-                    &end_error,
-                ));
-                points.push(end_state_point(
-                    opts,
-                    "gyrolab engine kept",
-                    || {
-                        KeptModelSystem::new(&sim.model, 0.0, &sim.model.x0)
-                            .expect("Foucault's gyroscope at rest keeps Jacobi's integral")
-                    },
-                    &sim.model.x0,
-                    method,
-                    &tol,
-                    &grid,
-                    &end_error,
-                ));
-            }
             // 4-state Anschütz (explicit methods are stability-bound: loosest tolerance only).
             if implicit || rtol == opts.tolerances[0] {
                 let tol4 = Tolerances {
@@ -293,6 +234,84 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
         atol_factor,
         points,
     })
+}
+
+/// Villarceau's points at one tolerance and method: hand-written eq. 44 bis, the engine
+/// (explicit methods only: the implicit ones' AD Jacobian is not the point here), and under
+/// DOP853 both again with the first integral kept by projection.
+fn villarceau_points(
+    opts: &StudyOptions,
+    sim: &Simulation,
+    v: Villarceau,
+    amplitude: f64,
+    t_end: f64,
+    method: Method,
+    tol: &Tolerances,
+) -> Vec<PeerPoint> {
+    let implicit = matches!(method, Method::Rodas4 | Method::Radau5);
+    let w0 = v.g_over_a.abs().sqrt();
+    let mut points = Vec::new();
+    let end_error =
+        |last: &[f64], x0: &[f64]| (last[0] - x0[0]).hypot((last[1] - x0[1]) / w0) / amplitude;
+    let grid = OutputGrid {
+        t0: 0.0,
+        dt: t_end,
+        t_end,
+    };
+    // Hand-written eq. 44 bis.
+    points.push(end_state_point(
+        opts,
+        "gyrolab eq44bis",
+        || Eq44Bis(v, None),
+        &[amplitude, 0.0],
+        method,
+        tol,
+        &grid,
+        &end_error,
+    ));
+    // The engine (explicit methods only: the implicit ones' AD Jacobian is not the point
+    // here).
+    if !implicit {
+        points.push(end_state_point(
+            opts,
+            "gyrolab engine",
+            || ModelSystem { model: &sim.model },
+            &sim.model.x0,
+            method,
+            tol,
+            &grid,
+            &end_error,
+        ));
+    }
+    // Both with the first integral kept by projection (DOP853, the explicit method
+    // these rows choose).
+    if method == Method::Dop853 {
+        let i0 = v.first_integral(amplitude, 0.0);
+        points.push(end_state_point(
+            opts,
+            "gyrolab eq44bis kept",
+            || Eq44Bis(v, Some(i0)),
+            &[amplitude, 0.0],
+            method,
+            tol,
+            &grid,
+            &end_error,
+        ));
+        points.push(end_state_point(
+            opts,
+            "gyrolab engine kept",
+            || {
+                KeptModelSystem::new(&sim.model, 0.0, &sim.model.x0)
+                    .expect("Foucault's gyroscope at rest keeps Jacobi's integral")
+            },
+            &sim.model.x0,
+            method,
+            tol,
+            &grid,
+            &end_error,
+        ));
+    }
+    points
 }
 
 /// A linear case with its exact solution at the grid times.

@@ -364,20 +364,9 @@ impl Stepper for Dop853 {
         &self.x_new
     }
 
-    fn x_new_mut(&mut self) -> &mut [f64] {
-        &mut self.x_new
-    }
-
-    fn refresh_end<S: OdeSystem>(
-        &mut self,
-        sys: &mut S,
-        w: Window,
-        t_new: f64,
-        stats: &mut SolverStats,
-    ) {
+    fn end_state_mut(&mut self) -> (&mut [f64], Option<&mut [f64]>) {
         let n = self.n;
-        sys.rhs(w.at(t_new), &self.x_new, &mut self.k[12 * n..13 * n]);
-        stats.rhs_evals += 1;
+        (&mut self.x_new, Some(&mut self.k[12 * n..13 * n]))
     }
 
     fn prepare_dense<S: OdeSystem>(

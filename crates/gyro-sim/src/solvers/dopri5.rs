@@ -168,19 +168,8 @@ impl Stepper for Dopri5 {
         &self.x_new
     }
 
-    fn x_new_mut(&mut self) -> &mut [f64] {
-        &mut self.x_new
-    }
-
-    fn refresh_end<S: OdeSystem>(
-        &mut self,
-        sys: &mut S,
-        w: Window,
-        t_new: f64,
-        stats: &mut SolverStats,
-    ) {
-        sys.rhs(w.at(t_new), &self.x_new, &mut self.k[6]);
-        stats.rhs_evals += 1;
+    fn end_state_mut(&mut self) -> (&mut [f64], Option<&mut [f64]>) {
+        (&mut self.x_new, Some(&mut self.k[6]))
     }
 
     fn prepare_dense<S: OdeSystem>(

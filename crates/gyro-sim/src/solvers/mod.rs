@@ -557,21 +557,11 @@ pub(crate) trait Stepper {
     /// State at the end of the last accepted attempt.
     fn x_new(&self) -> &[f64];
 
-    /// The same, for a projection to move ([`OdeSystem::project`]); [`Self::refresh_end`]
-    /// follows any move.
-    fn x_new_mut(&mut self) -> &mut [f64];
-
-    /// Re-evaluates what the stepper carries from the end state of the last accepted attempt
-    /// into the next step (the first-same-as-last derivative) after a projection moved it.
-    /// Steppers that evaluate everything afresh at a step's start carry nothing.
-    fn refresh_end<S: OdeSystem>(
-        &mut self,
-        _sys: &mut S,
-        _w: Window,
-        _t_new: f64,
-        _stats: &mut SolverStats,
-    ) {
-    }
+    /// The same for a projection to move ([`OdeSystem::project`]), with the slot of the
+    /// derivative the stepper carries from it into the next step (first-same-as-last), which
+    /// [`run`] re-evaluates after a move; `None` for steppers that evaluate everything afresh
+    /// at a step's start.
+    fn end_state_mut(&mut self) -> (&mut [f64], Option<&mut [f64]>);
 
     /// Compute whatever the dense output needs beyond the step itself (extra stages); called
     /// at most once per accepted step, only when a sample falls strictly inside it.
@@ -672,11 +662,14 @@ fn run<S: OdeSystem, St: Stepper>(
             stats.steps += 1;
             sys.step_counted(true);
             if projects && (last || stats.steps.is_multiple_of(PROJECTION_INTERVAL)) {
-                let moved = sys.project(t_new, st.x_new_mut(), tol);
-                if moved {
-                    st.refresh_end(sys, w, t_new, stats);
-                    if st.x_new().iter().any(|v| !v.is_finite()) {
+                let (x_new, f_new) = st.end_state_mut();
+                if sys.project(t_new, x_new, tol) {
+                    if x_new.iter().any(|v| !v.is_finite()) {
                         return Err(SolveError::NonFiniteState { t: t_new });
+                    }
+                    if let Some(f) = f_new {
+                        sys.rhs(w.at(t_new), x_new, f);
+                        stats.rhs_evals += 1;
                     }
                 }
             }

@@ -602,8 +602,8 @@ impl Stepper for Radau5 {
         &self.x_new
     }
 
-    fn x_new_mut(&mut self) -> &mut [f64] {
-        &mut self.x_new
+    fn end_state_mut(&mut self) -> (&mut [f64], Option<&mut [f64]>) {
+        (&mut self.x_new, None)
     }
 
     fn dense(&self, _x_old: &[f64], theta: f64, _h: f64, out: &mut [f64]) {

@@ -343,8 +343,8 @@ impl Stepper for Rodas4 {
         &self.x_new
     }
 
-    fn x_new_mut(&mut self) -> &mut [f64] {
-        &mut self.x_new
+    fn end_state_mut(&mut self) -> (&mut [f64], Option<&mut [f64]>) {
+        (&mut self.x_new, None)
     }
 
     fn prepare_dense<S: OdeSystem>(
