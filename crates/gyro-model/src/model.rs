@@ -384,8 +384,10 @@ pub struct CompiledModel<M: ShipMotion> {
     pub motors: Vec<SpinMotor>,
     pub spin_momentum: Vec<f64>,
     stationary: Option<StationaryBase>,
-    /// `linear` fidelity: A (dim×dim) about x_eq.
+    /// `linear` fidelity: A (dim×dim) about x_eq, row-major, and its transpose (the right-hand
+    /// side runs down A's columns).
     linear_a: Vec<f64>,
+    linear_at: Vec<f64>,
     /// Apparent equilibrium state (full-fidelity layout).
     pub x_equilibrium: Vec<f64>,
     /// Initial state in this model's layout.
@@ -611,6 +613,7 @@ impl<M: ShipMotion> CompiledModel<M> {
             spin_momentum,
             stationary,
             linear_a: Vec::new(),
+            linear_at: Vec::new(),
             x_equilibrium: Vec::new(),
             x0: Vec::new(),
             tapes: Vec::new(),
@@ -1117,6 +1120,9 @@ impl<M: ShipMotion> CompiledModel<M> {
                 let dim = x.len();
                 let mut a = vec![0.0; dim * dim];
                 self.jacobian_at(Fidelity::Full, 0.0, &xe, &mut a);
+                self.linear_at = (0..dim * dim)
+                    .map(|k| a[(k % dim) * dim + k / dim])
+                    .collect();
                 self.linear_a = a;
                 self.x0 = x;
             }
@@ -1182,16 +1188,28 @@ impl<M: ShipMotion> CompiledModel<M> {
                 return false;
             }
         }
-        // Rows as slices (one bounds check per row, not per entry); the same sums in the same
-        // order.
-        let (x, xe) = (&x[..dim], &xe[..dim]);
-        for (d, row) in dx[..dim].iter_mut().zip(self.linear_a.chunks_exact(dim)) {
-            let mut s = 0.0;
-            for ((a, xj), ej) in row.iter().zip(x).zip(xe) {
-                s += a * (xj - ej);
-            }
-            *d += s;
+        // A (x − x_e) down A's columns, every row's sum in its own accumulator: each row is
+        // summed in the same order as a row-by-row product (the same result to the bit), but
+        // the rows' chains of additions run side by side. The sizes models have are
+        // monomorphised so the accumulators live in registers.
+        macro_rules! sized {
+            ($($k:literal)*) => {
+                match dim {
+                    $($k => add_matvec::<$k>(&self.linear_at, x, xe, dx),)*
+                    _ => {
+                        let (x, xe) = (&x[..dim], &xe[..dim]);
+                        for (d, row) in dx[..dim].iter_mut().zip(self.linear_a.chunks_exact(dim)) {
+                            let mut s = 0.0;
+                            for ((a, xj), ej) in row.iter().zip(x).zip(xe) {
+                                s += a * (xj - ej);
+                            }
+                            *d += s;
+                        }
+                    }
+                }
+            };
         }
+        sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
         true
     }
 
@@ -2346,5 +2364,19 @@ impl<M: ShipMotion> CompiledModel<M> {
         let mut a = vec![0.0; dim * dim];
         self.jacobian_at(Fidelity::Full, 0.0, &self.x_equilibrium, &mut a);
         linalg::eigenvalues(&a, dim)
+    }
+}
+
+/// dx += A (x − x_e) for an N-state model from Aᵀ (row-major), row sums in column order.
+fn add_matvec<const N: usize>(at: &[f64], x: &[f64], xe: &[f64], dx: &mut [f64]) {
+    let mut s = [0.0; N];
+    for (col, (xj, ej)) in at[..N * N].chunks_exact(N).zip(x[..N].iter().zip(&xe[..N])) {
+        let y = xj - ej;
+        for (si, a) in s.iter_mut().zip(col) {
+            *si += a * y;
+        }
+    }
+    for (d, si) in dx[..N].iter_mut().zip(s) {
+        *d += si;
     }
 }

@@ -1,6 +1,7 @@
 //! Dense LU factorisation with partial pivoting for the small (2–16 state) iteration matrices
 //! of the implicit solvers, real and complex (RADAU5's (α + iβ)/h · I − J). Row-major storage,
-//! in place, no allocation.
+//! in place, no allocation in the step loop. [`IterationMatrix`] and [`ComplexIterationMatrix`]
+//! factor c·I − J with a model's kinematic rows q̇ = v eliminated first.
 
 /// Factor the row-major n×n matrix `a` in place into L (unit lower, below the diagonal) and U
 /// (above it, with the reciprocals of its pivots on the diagonal). `piv` holds 2n entries: the
@@ -8,6 +9,19 @@
 /// i of the permuted matrix is row `piv[n + i]` of `a`), which the solves gather by.
 /// Returns false if a zero pivot makes the matrix singular.
 pub(crate) fn lu_decompose(a: &mut [f64], n: usize, piv: &mut [usize]) -> bool {
+    macro_rules! sized {
+        ($($k:literal)*) => {
+            match n {
+                $($k => real_factorisation(&mut a[..$k * $k], $k, &mut piv[..2 * $k]),)*
+                _ => real_factorisation(a, n, piv),
+            }
+        };
+    }
+    sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+}
+
+#[inline(always)]
+fn real_factorisation(a: &mut [f64], n: usize, piv: &mut [usize]) -> bool {
     let (piv, perm) = piv.split_at_mut(n);
     for (i, p) in perm[..n].iter_mut().enumerate() {
         *p = i;
@@ -77,7 +91,7 @@ pub(crate) fn lu_decompose(a: &mut [f64], n: usize, piv: &mut [usize]) -> bool {
 /// throwaway binaries alternated three times (2026-12-06, best of 10⁵ runs each): RODAS4 at 5e-4
 /// on the 4-state case 7.36–7.40 → 6.04–6.25 µs, RADAU5 at 1e-6 14.73–14.76 → 13.76–13.98 µs;
 /// the engine's 8-state linear case under RODAS4 at 2e-4 13.76–13.92 → 12.88–13.06 µs, at 2e-6
-/// 33.2–33.3 → 30.7–31.4 µs; the same steps and RHS calls. Whole runs (`farm-bench`, old and new
+/// 33.2–33.3 → 30.7–31.4 µs; the same steps and RHS calls. Whole runs (whole-process timing, old and new
 /// `gyrolab run` paired, medians of 9 pairs): 6 h of `rolling-intercardinal` at `full` under
 /// RODAS4 0.932× wall; `speed-change-20kn` at `full` under RADAU5 rtol 1e-8 (16 states, its time
 /// mostly the right-hand side) 1.012× (1.003–1.027), a cost not traced.
@@ -245,6 +259,336 @@ fn complex_substitution(re: &[f64], im: &[f64], n: usize, br: &mut [f64], bi: &m
             let (ar, ai) = (re[r * n + i], im[r * n + i]);
             br[r] -= ar * yr - ai * yi;
             bi[r] -= ar * yi + ai * yr;
+        }
+    }
+}
+
+/// A real iteration matrix c·I − J, factored for repeated solves.
+///
+/// The engine's `full` and `linear` models start their state with the coordinates q and their
+/// rates v, and q̇ = v: J's first m rows are unit rows (row i is 1 at column m + i and 0
+/// elsewhere). Write the unknowns (u, z), u the first m, z = (v, w) the rest, the right-hand
+/// side (r₁, r₂), and B, R for J's lower rows left and right of column m. The top rows say
+/// c u − v = r₁, so u leaves the system and what is left is the (n − m)-square Schur complement
+/// S = c I − R − (1/c) B [I 0]: an 8-state model factors a 4 × 4 matrix instead of an 8 × 8 one
+/// (an eighth of the work) and solves a 4-square system plus two short products.
+///
+/// Each kinematic pair j is recovered in the form that does not cancel. Where c is large
+/// against B's column (short steps) u_j ≈ r₁ⱼ/c and v_j is small: S is solved for v_j and
+/// u_j = (r₁ⱼ + v_j)/c. Where B's column is large against c·|(c I − R)'s column| (long steps over
+/// a stiff mode) v_j ≈ −r₁ⱼ and u_j is small, so (r₁ⱼ + v_j)/c would lose u_j's digits: the same S
+/// is then solved for c·u_j (its column j scaled by c, which partial pivoting does not see),
+/// u_j = (c u_j)/c and v_j = c u_j − r₁ⱼ. The right-hand side of S is r₂ plus one product G r₁
+/// whose column j is B's over c in the first form and (c I − R)'s in the second. Results differ
+/// from the whole pivoted factorisation by rounding only: the unit tests below hold the two to
+/// each other and the residual to a few ulps, with the stiffness up to 4e5 and c from 1e-3 to
+/// 1e3. A Jacobian without these rows (a `gyroscopic` model, a hand-written system in another
+/// order, a difference Jacobian) is factored whole.
+pub(crate) struct IterationMatrix {
+    n: usize,
+    /// Kinematic rows eliminated (0: the whole matrix is factored).
+    m: usize,
+    /// 1/c.
+    g: f64,
+    /// LU factors of S ((n − m)², row-major), as [`lu_decompose`] leaves them.
+    lu: Vec<f64>,
+    piv: Vec<usize>,
+    /// Gᵀ (m × (n − m), row-major), its columns in S's row permutation.
+    gt: Vec<f64>,
+    /// Pair j solved for c·u_j (true) or for v_j.
+    stiff: Vec<bool>,
+    scratch: Vec<f64>,
+}
+
+/// Whether kinematic pair j is solved for c·u_j: B's column j (`b_col`, 1-norm) against |c|
+/// times the 1-norm of (c I − R)'s column j (`s_col`).
+fn solve_for_position(b_col: f64, c_abs: f64, s_col: f64) -> bool {
+    b_col > c_abs * s_col
+}
+
+impl IterationMatrix {
+    pub(crate) fn new(n: usize) -> Self {
+        IterationMatrix {
+            n,
+            m: 0,
+            g: 0.0,
+            lu: vec![0.0; n * n],
+            piv: vec![0; 2 * n],
+            gt: vec![0.0; n * n],
+            stiff: vec![false; n],
+            scratch: vec![0.0; n * n],
+        }
+    }
+
+    /// How many leading rows of the row-major n × n `jac` are kinematic (row i exactly the unit
+    /// vector at column m + i); 0 if they are not.
+    pub(crate) fn kinematic_rows(jac: &[f64], n: usize) -> usize {
+        let Some(m) = jac[..n].iter().position(|&v| v != 0.0) else {
+            return 0;
+        };
+        // (At most 16 states left: the reduced solve is monomorphised up to there.)
+        if m == 0 || 2 * m > n || n - m > 16 {
+            return 0;
+        }
+        for i in 0..m {
+            let row = &jac[i * n..(i + 1) * n];
+            if row[m + i] != 1.0 || row.iter().filter(|&&v| v != 0.0).count() != 1 {
+                return 0;
+            }
+        }
+        m
+    }
+
+    /// Factors c·I − `jac`, eliminating the first `m` rows (see [`Self::kinematic_rows`]).
+    /// Returns false if the matrix is singular.
+    pub(crate) fn factor(&mut self, jac: &[f64], m: usize, c: f64) -> bool {
+        let n = self.n;
+        let r = n - m;
+        let g = 1.0 / c;
+        self.m = m;
+        self.g = g;
+        for i in 0..r {
+            let row = &jac[(m + i) * n..(m + i + 1) * n];
+            let (left, right) = row.split_at(m);
+            let s = &mut self.lu[i * r..(i + 1) * r];
+            for (e, &v) in s.iter_mut().zip(right) {
+                *e = -v;
+            }
+            s[i] += c;
+            // G's column j before S takes B/c in: (c I − R)'s column j, or B's over c.
+            for (j, &v) in left.iter().enumerate() {
+                self.scratch[j * r + i] = g * v;
+            }
+            for (e, &v) in s.iter_mut().zip(left) {
+                *e -= g * v;
+            }
+        }
+        for j in 0..m {
+            let b_col: f64 = (0..r).map(|i| jac[(m + i) * n + j].abs()).sum();
+            let s_col: f64 = (0..r)
+                .map(|i| (jac[(m + i) * n + m + j] - if i == j { c } else { 0.0 }).abs())
+                .sum();
+            self.stiff[j] = solve_for_position(b_col, c.abs(), s_col);
+            if self.stiff[j] {
+                for i in 0..r {
+                    let cs = if i == j { c } else { 0.0 };
+                    self.scratch[j * r + i] = cs - jac[(m + i) * n + m + j];
+                }
+            }
+        }
+        if !lu_decompose(&mut self.lu[..r * r], r, &mut self.piv[..2 * r]) {
+            return false;
+        }
+        let perm = &self.piv[r..2 * r];
+        for (col, raw) in self.gt[..m * r]
+            .chunks_exact_mut(r)
+            .zip(self.scratch.chunks_exact(r))
+        {
+            for (e, &p) in col.iter_mut().zip(perm) {
+                *e = raw[p];
+            }
+        }
+        true
+    }
+
+    /// Solves (c·I − J) y = `b` in place.
+    pub(crate) fn solve(&self, rhs: &mut [f64]) {
+        let (m, r) = (self.m, self.n - self.m);
+        if m == 0 {
+            return lu_solve(&self.lu[..r * r], r, &self.piv[..2 * r], &mut rhs[..r]);
+        }
+        macro_rules! sized {
+            ($($k:literal)*) => {
+                match r {
+                    $($k => self.reduced_solve::<$k>(rhs),)*
+                    _ => unreachable!("kinematic rows are eliminated up to 16 remaining states"),
+                }
+            };
+        }
+        sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+    }
+
+    /// The solve with m > 0 rows eliminated and R = n − m left, R in registers: r₂ gathered by
+    /// S's permutation, plus G r₁ column by column, S's substitutions, then u (and v).
+    fn reduced_solve<const R: usize>(&self, rhs: &mut [f64]) {
+        let (r1, r2) = rhs[..self.n].split_at_mut(self.m);
+        let perm = &self.piv[R..2 * R];
+        let mut y: [f64; R] = std::array::from_fn(|i| r2[perm[i]]);
+        for (&u, col) in r1.iter().zip(self.gt.chunks_exact(R)) {
+            for (z, &b) in y.iter_mut().zip(col) {
+                *z += b * u;
+            }
+        }
+        real_substitution(&self.lu[..R * R], R, &mut y);
+        r2[..R].copy_from_slice(&y);
+        for ((u, v), &stiff) in r1.iter_mut().zip(r2.iter_mut()).zip(&self.stiff) {
+            if stiff {
+                // y_j = c u_j.
+                let cu = *v;
+                *v = cu - *u;
+                *u = self.g * cu;
+            } else {
+                *u = self.g * (*u + *v);
+            }
+        }
+    }
+}
+
+/// The complex counterpart of [`IterationMatrix`], for RADAU5's c·I − J with c = (α + iβ)/h:
+/// the same elimination of the kinematic rows and the same choice of form per pair; J (so B
+/// and R) is real, c, G and S complex.
+pub(crate) struct ComplexIterationMatrix {
+    n: usize,
+    m: usize,
+    /// 1/c, real and imaginary parts.
+    g: (f64, f64),
+    /// LU factors of S, real and imaginary parts, as [`lu_decompose_complex`] leaves them.
+    re: Vec<f64>,
+    im: Vec<f64>,
+    piv: Vec<usize>,
+    /// Gᵀ (m × (n − m), row-major), real and imaginary parts, in S's row permutation.
+    gt_re: Vec<f64>,
+    gt_im: Vec<f64>,
+    stiff: Vec<bool>,
+    scratch_re: Vec<f64>,
+    scratch_im: Vec<f64>,
+}
+
+impl ComplexIterationMatrix {
+    pub(crate) fn new(n: usize) -> Self {
+        ComplexIterationMatrix {
+            n,
+            m: 0,
+            g: (0.0, 0.0),
+            re: vec![0.0; n * n],
+            im: vec![0.0; n * n],
+            piv: vec![0; 2 * n],
+            gt_re: vec![0.0; n * n],
+            gt_im: vec![0.0; n * n],
+            stiff: vec![false; n],
+            scratch_re: vec![0.0; n * n],
+            scratch_im: vec![0.0; n * n],
+        }
+    }
+
+    /// Factors (cr + i ci)·I − `jac`, eliminating the first `m` rows
+    /// ([`IterationMatrix::kinematic_rows`]). Returns false if the matrix is singular.
+    pub(crate) fn factor(&mut self, jac: &[f64], m: usize, cr: f64, ci: f64) -> bool {
+        let n = self.n;
+        let r = n - m;
+        let d = cr * cr + ci * ci;
+        let (gr, gi) = (cr / d, -ci / d);
+        self.m = m;
+        self.g = (gr, gi);
+        for i in 0..r {
+            let row = &jac[(m + i) * n..(m + i + 1) * n];
+            let (left, right) = row.split_at(m);
+            let sr = &mut self.re[i * r..(i + 1) * r];
+            let si = &mut self.im[i * r..(i + 1) * r];
+            for ((er, ei), &v) in sr.iter_mut().zip(si.iter_mut()).zip(right) {
+                *er = -v;
+                *ei = 0.0;
+            }
+            sr[i] += cr;
+            si[i] += ci;
+            for (j, &v) in left.iter().enumerate() {
+                self.scratch_re[j * r + i] = gr * v;
+                self.scratch_im[j * r + i] = gi * v;
+            }
+            for ((er, ei), &v) in sr.iter_mut().zip(si.iter_mut()).zip(left) {
+                *er -= gr * v;
+                *ei -= gi * v;
+            }
+        }
+        let c_abs = cr.hypot(ci);
+        for j in 0..m {
+            let b_col: f64 = (0..r).map(|i| jac[(m + i) * n + j].abs()).sum();
+            let s_col: f64 = (0..r)
+                .map(|i| {
+                    let (sr, si) = if i == j { (cr, ci) } else { (0.0, 0.0) };
+                    (sr - jac[(m + i) * n + m + j]).hypot(si)
+                })
+                .sum();
+            self.stiff[j] = solve_for_position(b_col, c_abs, s_col);
+            if self.stiff[j] {
+                for i in 0..r {
+                    let (sr, si) = if i == j { (cr, ci) } else { (0.0, 0.0) };
+                    self.scratch_re[j * r + i] = sr - jac[(m + i) * n + m + j];
+                    self.scratch_im[j * r + i] = si;
+                }
+            }
+        }
+        if !lu_decompose_complex(
+            &mut self.re[..r * r],
+            &mut self.im[..r * r],
+            r,
+            &mut self.piv[..2 * r],
+        ) {
+            return false;
+        }
+        let perm = &self.piv[r..2 * r];
+        for (gt, raw) in [
+            (&mut self.gt_re, &self.scratch_re),
+            (&mut self.gt_im, &self.scratch_im),
+        ] {
+            for (col, raw) in gt[..m * r].chunks_exact_mut(r).zip(raw.chunks_exact(r)) {
+                for (e, &p) in col.iter_mut().zip(perm) {
+                    *e = raw[p];
+                }
+            }
+        }
+        true
+    }
+
+    /// Solves (c·I − J) y = `br` + i `bi` in place.
+    pub(crate) fn solve(&self, br: &mut [f64], bi: &mut [f64]) {
+        let (m, r) = (self.m, self.n - self.m);
+        if m == 0 {
+            let (re, im) = (&self.re[..r * r], &self.im[..r * r]);
+            return lu_solve_complex(re, im, r, &self.piv[..2 * r], br, bi);
+        }
+        macro_rules! sized {
+            ($($k:literal)*) => {
+                match r {
+                    $($k => self.reduced_solve::<$k>(br, bi),)*
+                    _ => unreachable!("kinematic rows are eliminated up to 16 remaining states"),
+                }
+            };
+        }
+        sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+    }
+
+    fn reduced_solve<const R: usize>(&self, br: &mut [f64], bi: &mut [f64]) {
+        let (gr, gi) = self.g;
+        let (r1r, r2r) = br[..self.n].split_at_mut(self.m);
+        let (r1i, r2i) = bi[..self.n].split_at_mut(self.m);
+        let perm = &self.piv[R..2 * R];
+        let mut yr: [f64; R] = std::array::from_fn(|i| r2r[perm[i]]);
+        let mut yi: [f64; R] = std::array::from_fn(|i| r2i[perm[i]]);
+        let cols = self.gt_re.chunks_exact(R).zip(self.gt_im.chunks_exact(R));
+        for ((&ur, &ui), (cre, cim)) in r1r.iter().zip(r1i.iter()).zip(cols) {
+            for (((a, b), &er), &ei) in yr.iter_mut().zip(yi.iter_mut()).zip(cre).zip(cim) {
+                *a += er * ur - ei * ui;
+                *b += er * ui + ei * ur;
+            }
+        }
+        complex_substitution(&self.re[..R * R], &self.im[..R * R], R, &mut yr, &mut yi);
+        r2r[..R].copy_from_slice(&yr);
+        r2i[..R].copy_from_slice(&yi);
+        let pairs = r1r.iter_mut().zip(r1i.iter_mut());
+        let rates = r2r.iter_mut().zip(r2i.iter_mut());
+        for (((ur, ui), (vr, vi)), &stiff) in pairs.zip(rates).zip(&self.stiff) {
+            let (ar, ai) = if stiff {
+                // y_j = c u_j.
+                let (cur, cui) = (*vr, *vi);
+                *vr = cur - *ur;
+                *vi = cui - *ui;
+                (cur, cui)
+            } else {
+                (*ur + *vr, *ui + *vi)
+            };
+            *ur = gr * ar - gi * ai;
+            *ui = gr * ai + gi * ar;
         }
     }
 }
@@ -460,5 +804,164 @@ mod tests {
         }
         let (mut sr, mut si) = ([1.0, 2.0, 2.0, 4.0], [1.0, 0.0, 2.0, 0.0]);
         assert!(!lu_decompose_complex(&mut sr, &mut si, 2, &mut piv));
+    }
+
+    /// J with kinematic first m rows and random lower rows (the stiffness block scaled by
+    /// `stiff`), n = 2m + extra.
+    fn kinematic_jacobian(m: usize, extra: usize, stiff: f64, seed: u64) -> Vec<f64> {
+        let n = 2 * m + extra;
+        let mut jac = entries(seed, n * n);
+        for i in 0..m {
+            for j in 0..n {
+                jac[i * n + j] = if j == m + i { 1.0 } else { 0.0 };
+            }
+        }
+        for i in m..n {
+            for j in 0..m {
+                jac[i * n + j] *= stiff;
+            }
+        }
+        jac
+    }
+
+    #[test]
+    fn kinematic_rows_are_found_only_where_they_are() {
+        let jac = kinematic_jacobian(4, 0, 1.0, 3);
+        assert_eq!(IterationMatrix::kinematic_rows(&jac, 8), 4);
+        let jac = kinematic_jacobian(3, 2, 1.0, 4);
+        assert_eq!(IterationMatrix::kinematic_rows(&jac, 8), 3);
+        // A stray entry in a kinematic row, a rate of 2, an empty first row: factored whole.
+        // (Entries of the row-major 8 × 8: row 1 column 0, row 2 column 6, row 0 column 4.)
+        for (at, v) in [(8, 1e-300), (22, 2.0), (4, 0.0)] {
+            let mut bad = kinematic_jacobian(4, 0, 1.0, 3);
+            bad[at] = v;
+            assert_eq!(
+                IterationMatrix::kinematic_rows(&bad, 8),
+                0,
+                "entry {at} = {v}"
+            );
+        }
+        // More kinematic columns than rows can hold.
+        let mut wide = vec![0.0; 9];
+        wide[2] = 1.0;
+        assert_eq!(IterationMatrix::kinematic_rows(&wide, 3), 0);
+    }
+
+    /// The reduced solve against the whole pivoted factorisation of the same c·I − J, from
+    /// mild to very stiff (the stiffness block up to 4e5, a 100-Hz mode, with c down to 1e-3:
+    /// steps of 10³ s on it).
+    #[test]
+    fn reduced_solve_agrees_with_the_whole_factorisation() {
+        let mut worst: f64 = 0.0;
+        for (m, extra) in [(1, 0), (2, 0), (4, 0), (3, 2), (8, 0), (5, 3)] {
+            let n = 2 * m + extra;
+            for (k, (stiff, c)) in [
+                (1.0, 1.0),
+                (1.0, 1e3),
+                (4e5, 1e-3),
+                (4e5, 10.0),
+                (1e-3, 1e-2),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                let jac = kinematic_jacobian(m, extra, stiff, 11 + k as u64);
+                assert_eq!(IterationMatrix::kinematic_rows(&jac, n), m);
+                let mut whole: Vec<f64> = jac.iter().map(|v| -v).collect();
+                for i in 0..n {
+                    whole[i * n + i] += c;
+                }
+                let b0 = entries(99 + k as u64, n);
+                let mut piv = vec![0; 2 * n];
+                let mut y_whole = b0.clone();
+                assert!(lu_decompose(&mut whole, n, &mut piv));
+                lu_solve(&whole, n, &piv, &mut y_whole);
+                let mut im = IterationMatrix::new(n);
+                assert!(im.factor(&jac, m, c));
+                let mut y = b0.clone();
+                im.solve(&mut y);
+                // Residual of the reduced solution in the original matrix, relative.
+                let scale = y.iter().map(|v| v.abs()).fold(0.0, f64::max);
+                for i in 0..n {
+                    let mut r = c * y[i] - b0[i];
+                    for j in 0..n {
+                        r -= jac[i * n + j] * y[j];
+                    }
+                    let row = c + jac[i * n..(i + 1) * n].iter().map(|v| v.abs()).sum::<f64>();
+                    worst = worst.max(r.abs() / (row * scale));
+                }
+                let diff = y
+                    .iter()
+                    .zip(&y_whole)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max);
+                assert!(
+                    diff <= 1e-9 * scale,
+                    "m {m} n {n} stiff {stiff} c {c}: {diff:e}"
+                );
+            }
+        }
+        assert!(worst < 1e-14, "backward error {worst:e}");
+        // m = 0 is the whole factorisation itself.
+        let jac = entries(5, 36);
+        let mut im = IterationMatrix::new(6);
+        assert!(im.factor(&jac, 0, 2.0));
+        let mut y = entries(6, 6);
+        let b0 = y.clone();
+        im.solve(&mut y);
+        for i in 0..6 {
+            let r: f64 = 2.0 * y[i] - b0[i] - (0..6).map(|j| jac[i * 6 + j] * y[j]).sum::<f64>();
+            assert!(r.abs() < 1e-13, "{r:e}");
+        }
+    }
+
+    /// The complex reduced solve against the whole complex factorisation of (cr + i ci) I − J.
+    #[test]
+    fn complex_reduced_solve_agrees_with_the_whole_factorisation() {
+        for (m, extra) in [(1, 0), (4, 0), (3, 2), (8, 0)] {
+            let n = 2 * m + extra;
+            for (k, (stiff, cr, ci)) in [(1.0, 1.0, 0.5), (4e5, 2e-3, 1.5e-3), (1.0, 1e3, 800.0)]
+                .into_iter()
+                .enumerate()
+            {
+                let jac = kinematic_jacobian(m, extra, stiff, 31 + k as u64);
+                let (mut re, mut im): (Vec<f64>, Vec<f64>) =
+                    (jac.iter().map(|v| -v).collect(), vec![0.0; n * n]);
+                for i in 0..n {
+                    re[i * n + i] += cr;
+                    im[i * n + i] = ci;
+                }
+                let (br0, bi0) = (entries(7 + k as u64, n), entries(8 + k as u64, n));
+                let mut piv = vec![0; 2 * n];
+                assert!(lu_decompose_complex(&mut re, &mut im, n, &mut piv));
+                let (mut wr, mut wi) = (br0.clone(), bi0.clone());
+                lu_solve_complex(&re, &im, n, &piv, &mut wr, &mut wi);
+                let mut cm = ComplexIterationMatrix::new(n);
+                assert!(cm.factor(&jac, m, cr, ci));
+                let (mut yr, mut yi) = (br0.clone(), bi0.clone());
+                cm.solve(&mut yr, &mut yi);
+                let scale = yr.iter().chain(&yi).map(|v| v.abs()).fold(0.0, f64::max);
+                for i in 0..n {
+                    // Residual of (c I − J) y − b, relative to the row's size.
+                    let (mut rr, mut ri) = (
+                        cr * yr[i] - ci * yi[i] - br0[i],
+                        cr * yi[i] + ci * yr[i] - bi0[i],
+                    );
+                    for j in 0..n {
+                        rr -= jac[i * n + j] * yr[j];
+                        ri -= jac[i * n + j] * yi[j];
+                    }
+                    let row =
+                        cr.hypot(ci) + jac[i * n..(i + 1) * n].iter().map(|v| v.abs()).sum::<f64>();
+                    assert!(
+                        rr.hypot(ri) < 1e-14 * row * scale,
+                        "m {m} n {n} k {k}: residual {:e}",
+                        rr.hypot(ri) / (row * scale)
+                    );
+                    let d = (yr[i] - wr[i]).hypot(yi[i] - wi[i]);
+                    assert!(d <= 1e-9 * scale, "m {m} n {n} k {k}: {d:e}");
+                }
+            }
+        }
     }
 }

@@ -6,7 +6,8 @@
 //! Per step: the stage increments Z = (z₁, z₂, z₃) at c = ((4 − √6)/10, (4 + √6)/10, 1) solve
 //! Z = h (A ⊗ I) F(Z) by a simplified Newton iteration on the system transformed by T⁻¹ (T⁻¹A⁻¹T
 //! = diag(γ, [[α, −β], [β, α]])), which needs one real LU of (γ/h) I − J and one complex LU of
-//! ((α + iβ)/h) I − J (`linalg`, complex arithmetic on n×n). J is the system's exact Jacobian when
+//! ((α + iβ)/h) I − J (`linalg`, complex arithmetic; a model's kinematic rows q̇ = v eliminated
+//! first, so an 8-state `full` model factors 4-square matrices). J is the system's exact Jacobian when
 //! it provides one, else central differences (2n rhs calls). Each Newton iteration costs 3 rhs
 //! calls; at most 7 iterations, stopped when the predicted remaining error is below
 //! `fnewt` = max(10 eps/rtol', min(0.03, √rtol')). Newton starts from the previous step's
@@ -42,7 +43,7 @@
 //! Measured by `gyrolab accuracy` (work-precision, with rodas4 and dop853) and by the solver
 //! harness (`cargo test --release --workspace -- solvers::`).
 
-use super::linalg::{lu_decompose, lu_decompose_complex, lu_solve, lu_solve_complex};
+use super::linalg::{ComplexIterationMatrix, IterationMatrix};
 use super::{
     Attempt, InitialStepScratch, OdeSystem, SolveError, SolverStats, Stepper, Tolerances, Window,
     difference_jacobian, initial_step,
@@ -138,13 +139,12 @@ pub(crate) struct Radau5 {
     jac_fresh: bool,
     /// J (from an earlier point) may serve this step: the last Newton contraction was fast.
     jac_usable: bool,
-    /// LU of (γ/h) I − J.
-    e1: Vec<f64>,
-    piv1: Vec<usize>,
-    /// LU of ((α + iβ)/h) I − J, real and imaginary parts.
-    e2r: Vec<f64>,
-    e2i: Vec<f64>,
-    piv2: Vec<usize>,
+    /// Kinematic rows of J (`IterationMatrix::kinematic_rows`), found when J is formed.
+    kinematic: usize,
+    /// (γ/h) I − J, factored.
+    e1: IterationMatrix,
+    /// ((α + iβ)/h) I − J, factored.
+    e2: ComplexIterationMatrix,
     /// The h the LUs were formed with; `None` when they are stale.
     lu_h: Option<f64>,
     /// Stage increments z_k = X_k − x (after the iteration: of the collocation solution).
@@ -188,11 +188,9 @@ impl Radau5 {
             jac: vec![0.0; n * n],
             jac_fresh: false,
             jac_usable: false,
-            e1: vec![0.0; n * n],
-            piv1: vec![0; 2 * n],
-            e2r: vec![0.0; n * n],
-            e2i: vec![0.0; n * n],
-            piv2: vec![0; 2 * n],
+            kinematic: 0,
+            e1: IterationMatrix::new(n),
+            e2: ComplexIterationMatrix::new(n),
             lu_h: None,
             z: std::array::from_fn(|_| v()),
             w: std::array::from_fn(|_| v()),
@@ -237,6 +235,7 @@ impl Radau5 {
                 stats,
             );
         }
+        self.kinematic = IterationMatrix::kinematic_rows(&self.jac, self.n);
         self.jac_fresh = true;
         self.jac_usable = true;
         self.lu_h = None;
@@ -244,21 +243,10 @@ impl Radau5 {
 
     /// LUs of (γ/h) I − J and ((α + iβ)/h) I − J; false when either is singular.
     fn decompose(&mut self, h: f64, stats: &mut SolverStats) -> bool {
-        let n = self.n;
         let (fac1, alphn, betan) = (U1 / h, ALPH / h, BETA / h);
-        for (k, &j) in self.jac.iter().enumerate() {
-            self.e1[k] = -j;
-            self.e2r[k] = -j;
-            self.e2i[k] = 0.0;
-        }
-        for i in 0..n {
-            self.e1[i * n + i] += fac1;
-            self.e2r[i * n + i] += alphn;
-            self.e2i[i * n + i] = betan;
-        }
         stats.lu_decompositions += 1;
-        let ok = lu_decompose(&mut self.e1, n, &mut self.piv1)
-            && lu_decompose_complex(&mut self.e2r, &mut self.e2i, n, &mut self.piv2);
+        let m = self.kinematic;
+        let ok = self.e1.factor(&self.jac, m, fac1) && self.e2.factor(&self.jac, m, alphn, betan);
         self.lu_h = if ok { Some(h) } else { None };
         ok
     }
@@ -327,7 +315,7 @@ impl Radau5 {
             self.ez[i] = hee1 * self.z[0][i] + hee2 * self.z[1][i] + hee3 * self.z[2][i];
             self.err_v[i] = self.ez[i] + self.f0[i];
         }
-        lu_solve(&self.e1, n, &self.piv1, &mut self.err_v);
+        self.e1.solve(&mut self.err_v);
         let err = self.scaled_norm(&self.err_v).max(1e-10);
         if !(err >= 1.0 && (self.first || self.rejected)) {
             return err;
@@ -340,7 +328,7 @@ impl Radau5 {
         for i in 0..n {
             self.err_v[i] += self.ez[i];
         }
-        lu_solve(&self.e1, n, &self.piv1, &mut self.err_v);
+        self.e1.solve(&mut self.err_v);
         self.scaled_norm(&self.err_v).max(1e-10)
     }
 
@@ -404,8 +392,8 @@ impl Radau5 {
                 z2[i] = s2 - w2[i] * alphn + w3[i] * betan;
                 z3[i] = s3 - w3[i] * alphn - w2[i] * betan;
             }
-            lu_solve(&self.e1, n, &self.piv1, z1);
-            lu_solve_complex(&self.e2r, &self.e2i, n, &self.piv2, z2, z3);
+            self.e1.solve(z1);
+            self.e2.solve(z2, z3);
             newt += 1;
             let mut dyno = 0.0;
             for i in 0..n {

@@ -6,12 +6,13 @@
 //! central differences (2n rhs calls, increment cbrt(eps)·max(|x_j|, 1e-2)); df/dt by a
 //! forward difference in t (1 rhs call; none when the system says it is autonomous, as a model
 //! on a stationary base does: the difference is then exactly zero); one LU of (1/(γh)) I − J
-//! (partial pivoting, `linalg`); 5 further rhs calls. The Jacobian is reused when a step is
+//! (partial pivoting, `linalg`; a model's kinematic rows q̇ = v eliminated first, so an 8-state
+//! `full` model factors a 4-square matrix); 5 further rhs calls. The Jacobian is reused when a step is
 //! retried at a smaller h. The embedded 3rd-order solution gives the error estimate; step
 //! control is Gustafsson's predictive controller as in RODAS. Dense output is RODAS's 3rd-order
 //! continuous extension. A singular matrix halves the step; five in a row is an error.
 
-use super::linalg::{lu_decompose, lu_solve};
+use super::linalg::IterationMatrix;
 use super::{
     Attempt, InitialStepScratch, OdeSystem, SolveError, SolverStats, Stepper, Tolerances, Window,
     difference_jacobian, error_norm, initial_step,
@@ -78,9 +79,10 @@ pub(crate) struct Rodas4 {
     /// df/dx, row-major; valid for the current point while `jac_current`.
     jac: Vec<f64>,
     jac_current: bool,
-    /// LU factors of (1/(γh)) I − J.
-    lu: Vec<f64>,
-    piv: Vec<usize>,
+    /// Kinematic rows of J (`IterationMatrix::kinematic_rows`), found when J is formed.
+    kinematic: usize,
+    /// (1/(γh)) I − J, factored.
+    matrix: IterationMatrix,
     ak: [Vec<f64>; 6],
     dy: Vec<f64>,
     x_stage: Vec<f64>,
@@ -103,8 +105,8 @@ impl Rodas4 {
             fx: vec![0.0; n],
             jac: vec![0.0; n * n],
             jac_current: false,
-            lu: vec![0.0; n * n],
-            piv: vec![0; 2 * n],
+            kinematic: 0,
+            matrix: IterationMatrix::new(n),
             ak: std::array::from_fn(|_| vec![0.0; n]),
             dy: vec![0.0; n],
             x_stage: vec![0.0; n],
@@ -143,6 +145,7 @@ impl Rodas4 {
                 stats,
             );
         }
+        self.kinematic = IterationMatrix::kinematic_rows(&self.jac, n);
         // df/dt by a forward difference, kept inside the segment; exactly zero, and not
         // computed, when f does not depend on t (the difference would be 0 to the bit).
         let delta = (f64::EPSILON * t.abs().max(1e-5)).sqrt();
@@ -160,29 +163,31 @@ impl Rodas4 {
         self.jac_current = true;
     }
 
-    /// Right-hand side `dy + sum_j hc_j ak_j + hd * fx` of stage `s`, solved in place into ak[s].
+    /// Right-hand side `dy + hd * fx + sum_j hc_j ak_j` of stage `s`, solved in place into
+    /// ak[s]. Summed one stage after another over all components (each component's sum in
+    /// the same order as component by component, so the same result to the bit, but as
+    /// loops the compiler vectorises).
     fn solve_stage(&mut self, s: usize, hc: &[f64], hd: f64) {
-        let n = self.n;
         let (done, rest) = self.ak.split_at_mut(s);
         let out = &mut rest[0];
-        for i in 0..n {
-            let mut v = self.dy[i] + hd * self.fx[i];
-            for (j, &c) in hc.iter().enumerate() {
-                v += c * done[j][i];
-            }
-            out[i] = v;
+        for ((o, &d), &f) in out.iter_mut().zip(&self.dy).zip(&self.fx) {
+            *o = d + hd * f;
         }
-        lu_solve(&self.lu, n, &self.piv, out);
+        for (&c, a) in hc.iter().zip(done.iter()) {
+            for (o, &v) in out.iter_mut().zip(a) {
+                *o += c * v;
+            }
+        }
+        self.matrix.solve(out);
     }
 
-    /// x_stage = x + sum_j a_j ak_j.
+    /// x_stage = x + sum_j a_j ak_j (stage by stage, as in `solve_stage`).
     fn stage_point(&mut self, x: &[f64], a: &[f64]) {
-        for i in 0..self.n {
-            let mut v = x[i];
-            for (j, &aj) in a.iter().enumerate() {
-                v += aj * self.ak[j][i];
+        self.x_stage.copy_from_slice(x);
+        for (&aj, k) in a.iter().zip(&self.ak) {
+            for (o, &v) in self.x_stage.iter_mut().zip(k) {
+                *o += aj * v;
             }
-            self.x_stage[i] = v;
         }
     }
 }
@@ -254,15 +259,11 @@ impl Stepper for Rodas4 {
         if !self.jac_current {
             self.linearise(sys, w, t, x, stats);
         }
-        let fac = 1.0 / (h * GAMMA);
-        for (e, j) in self.lu.iter_mut().zip(&self.jac) {
-            *e = -j;
-        }
-        for i in 0..n {
-            self.lu[i * n + i] += fac;
-        }
         stats.lu_decompositions += 1;
-        if !lu_decompose(&mut self.lu, n, &mut self.piv) {
+        if !self
+            .matrix
+            .factor(&self.jac, self.kinematic, 1.0 / (h * GAMMA))
+        {
             self.singular_in_row += 1;
             if self.singular_in_row >= MAX_SINGULAR {
                 return Err(SolveError::SingularMatrix { t });
