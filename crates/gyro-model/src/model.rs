@@ -1213,6 +1213,11 @@ impl<M: ShipMotion> CompiledModel<M> {
         true
     }
 
+    /// True when [`Self::jacobian`] is the same matrix at every t and x: a `linear` model's A.
+    pub fn jacobian_is_constant(&self) -> bool {
+        self.fidelity == Fidelity::Linear
+    }
+
     /// Exact Jacobian df/dx (row-major dim×dim): forward-mode dual numbers through the
     /// recorded tape (through the generic engine if none is recorded).
     pub fn jacobian(&self, t: f64, x: &[f64], jac: &mut [f64]) {

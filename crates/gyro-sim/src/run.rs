@@ -71,6 +71,9 @@ impl OdeSystem for ModelSystem<'_> {
     fn is_autonomous(&self) -> bool {
         self.model.is_autonomous()
     }
+    fn jacobian_is_constant(&self) -> bool {
+        self.model.jacobian_is_constant()
+    }
 }
 
 /// The solver's work so far, as a run's observer sees it (see [`Simulation::run_with_progress`]).
@@ -181,6 +184,9 @@ impl OdeSystem for CountingSystem<'_> {
     fn is_autonomous(&self) -> bool {
         self.inner.is_autonomous()
     }
+    fn jacobian_is_constant(&self) -> bool {
+        self.inner.jacobian_is_constant()
+    }
     fn projects(&self) -> bool {
         self.keeper.is_some()
     }
@@ -273,6 +279,9 @@ impl OdeSystem for KeptModelSystem<'_> {
     }
     fn is_autonomous(&self) -> bool {
         self.inner.is_autonomous()
+    }
+    fn jacobian_is_constant(&self) -> bool {
+        self.inner.jacobian_is_constant()
     }
     fn projects(&self) -> bool {
         true

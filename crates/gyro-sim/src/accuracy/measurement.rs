@@ -89,6 +89,9 @@ impl<S: OdeSystem> OdeSystem for Budget<S> {
     fn is_autonomous(&self) -> bool {
         self.inner.is_autonomous()
     }
+    fn jacobian_is_constant(&self) -> bool {
+        self.inner.jacobian_is_constant()
+    }
     fn projects(&self) -> bool {
         self.inner.projects()
     }

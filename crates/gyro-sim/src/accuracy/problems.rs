@@ -96,6 +96,9 @@ impl OdeSystem for LinearSystem {
     fn is_autonomous(&self) -> bool {
         true
     }
+    fn jacobian_is_constant(&self) -> bool {
+        true
+    }
 }
 
 /// Length of the Anschütz cases: about one damped period (4110 s at 50°N).

@@ -297,7 +297,6 @@ pub(crate) struct IterationMatrix {
     gt: Vec<f64>,
     /// Pair j solved for c·u_j (true) or for v_j.
     stiff: Vec<bool>,
-    scratch: Vec<f64>,
 }
 
 /// Whether kinematic pair j is solved for c·u_j: B's column j (`b_col`, 1-norm) against |c|
@@ -316,7 +315,6 @@ impl IterationMatrix {
             piv: vec![0; 2 * n],
             gt: vec![0.0; n * n],
             stiff: vec![false; n],
-            scratch: vec![0.0; n * n],
         }
     }
 
@@ -342,50 +340,74 @@ impl IterationMatrix {
     /// Factors c·I − `jac`, eliminating the first `m` rows (see [`Self::kinematic_rows`]).
     /// Returns false if the matrix is singular.
     pub(crate) fn factor(&mut self, jac: &[f64], m: usize, c: f64) -> bool {
-        let n = self.n;
-        let r = n - m;
-        let g = 1.0 / c;
+        let r = self.n - m;
         self.m = m;
-        self.g = g;
-        for i in 0..r {
-            let row = &jac[(m + i) * n..(m + i + 1) * n];
-            let (left, right) = row.split_at(m);
-            let s = &mut self.lu[i * r..(i + 1) * r];
-            for (e, &v) in s.iter_mut().zip(right) {
+        self.g = 1.0 / c;
+        if m == 0 {
+            let n = self.n;
+            for (e, &v) in self.lu.iter_mut().zip(jac) {
                 *e = -v;
             }
-            s[i] += c;
-            // G's column j before S takes B/c in: (c I − R)'s column j, or B's over c.
-            for (j, &v) in left.iter().enumerate() {
-                self.scratch[j * r + i] = g * v;
+            for i in 0..n {
+                self.lu[i * n + i] += c;
             }
-            for (e, &v) in s.iter_mut().zip(left) {
+            return lu_decompose(&mut self.lu, n, &mut self.piv);
+        }
+        macro_rules! sized {
+            ($($k:literal)*) => {
+                match r {
+                    $($k => self.reduced_factor::<$k>(jac, c),)*
+                    _ => unreachable!("kinematic rows are eliminated up to 16 remaining states"),
+                }
+            };
+        }
+        sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+    }
+
+    /// The factorisation with m = `self.m` > 0 rows eliminated and R = n − m left: S and G
+    /// formed in arrays of the size they have (their loops unrolled, no bounds checks), S
+    /// factored there, then stored with Gᵀ in S's row permutation.
+    fn reduced_factor<const R: usize>(&mut self, jac: &[f64], c: f64) -> bool {
+        let (n, m, g) = (self.n, self.m, self.g);
+        let mut s = [[0.0; R]; R];
+        // G's columns (m ≤ R of them): (c I − R)'s column j, or B's over c.
+        let mut gcol = [[0.0; R]; R];
+        for (i, si) in s.iter_mut().enumerate() {
+            let row = &jac[(m + i) * n..(m + i + 1) * n];
+            let (left, right) = row.split_at(m);
+            for (e, &v) in si.iter_mut().zip(right) {
+                *e = -v;
+            }
+            si[i] += c;
+            for (col, &v) in gcol.iter_mut().zip(left) {
+                col[i] = g * v;
+            }
+            for (e, &v) in si.iter_mut().zip(left) {
                 *e -= g * v;
             }
         }
-        for j in 0..m {
-            let b_col: f64 = (0..r).map(|i| jac[(m + i) * n + j].abs()).sum();
-            let s_col: f64 = (0..r)
+        for (j, col) in gcol.iter_mut().enumerate().take(m) {
+            let b_col: f64 = (0..R).map(|i| jac[(m + i) * n + j].abs()).sum();
+            let s_col: f64 = (0..R)
                 .map(|i| (jac[(m + i) * n + m + j] - if i == j { c } else { 0.0 }).abs())
                 .sum();
             self.stiff[j] = solve_for_position(b_col, c.abs(), s_col);
             if self.stiff[j] {
-                for i in 0..r {
+                for (i, e) in col.iter_mut().enumerate() {
                     let cs = if i == j { c } else { 0.0 };
-                    self.scratch[j * r + i] = cs - jac[(m + i) * n + m + j];
+                    *e = cs - jac[(m + i) * n + m + j];
                 }
             }
         }
-        if !lu_decompose(&mut self.lu[..r * r], r, &mut self.piv[..2 * r]) {
+        let flat = s.as_flattened_mut();
+        if !real_factorisation(flat, R, &mut self.piv[..2 * R]) {
             return false;
         }
-        let perm = &self.piv[r..2 * r];
-        for (col, raw) in self.gt[..m * r]
-            .chunks_exact_mut(r)
-            .zip(self.scratch.chunks_exact(r))
-        {
-            for (e, &p) in col.iter_mut().zip(perm) {
-                *e = raw[p];
+        self.lu[..R * R].copy_from_slice(flat);
+        let perm = &self.piv[R..2 * R];
+        for (out, col) in self.gt[..m * R].chunks_exact_mut(R).zip(&gcol) {
+            for (e, &p) in out.iter_mut().zip(perm) {
+                *e = col[p];
             }
         }
         true

@@ -57,6 +57,12 @@ pub trait OdeSystem {
     fn is_autonomous(&self) -> bool {
         false
     }
+    /// True when df/dx is the same at every t and x (a linear system, as a `linear` model
+    /// is): RODAS4 then forms J once per run instead of once per step. A wrapper must forward
+    /// it; the default, false, is always safe.
+    fn jacobian_is_constant(&self) -> bool {
+        false
+    }
     /// Whether [`Self::project`] keeps an invariant; the integrators call it only then.
     fn projects(&self) -> bool {
         false

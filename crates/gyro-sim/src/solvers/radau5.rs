@@ -139,6 +139,10 @@ pub(crate) struct Radau5 {
     jac_fresh: bool,
     /// J (from an earlier point) may serve this step: the last Newton contraction was fast.
     jac_usable: bool,
+    /// J is the system's constant one (`OdeSystem::jacobian_is_constant`): once formed, it
+    /// stays usable (forming it again would give the same matrix, and the same LUs at the
+    /// same h).
+    jac_constant: bool,
     /// Kinematic rows of J (`IterationMatrix::kinematic_rows`), found when J is formed.
     kinematic: usize,
     /// (γ/h) I − J, factored.
@@ -188,6 +192,7 @@ impl Radau5 {
             jac: vec![0.0; n * n],
             jac_fresh: false,
             jac_usable: false,
+            jac_constant: false,
             kinematic: 0,
             e1: IterationMatrix::new(n),
             e2: ComplexIterationMatrix::new(n),
@@ -236,6 +241,7 @@ impl Radau5 {
             );
         }
         self.kinematic = IterationMatrix::kinematic_rows(&self.jac, self.n);
+        self.jac_constant = sys.jacobian_is_constant();
         self.jac_fresh = true;
         self.jac_usable = true;
         self.lu_h = None;
@@ -255,7 +261,7 @@ impl Radau5 {
     /// (RADAU5: `IF (CALJAC) GOTO 20; GOTO 10`).
     fn reject(&mut self, h_next: f64) -> Attempt {
         self.rejected = true;
-        if !self.jac_fresh {
+        if !self.jac_fresh && !self.jac_constant {
             self.jac_usable = false;
         }
         Attempt {
@@ -460,7 +466,7 @@ impl Stepper for Radau5 {
         stats.rhs_evals += 1;
         self.f0_current = true;
         self.jac_fresh = false;
-        self.jac_usable = false;
+        self.jac_usable = self.jac_constant;
         self.lu_h = None;
         self.first = true;
         self.rejected = false;
@@ -571,7 +577,7 @@ impl Stepper for Radau5 {
             self.rejected = false;
             // Keep J for the next step while Newton contracts fast; keep h (and the LUs) when
             // the change would be small.
-            self.jac_usable = theta <= tol.jacobian_reuse_contraction;
+            self.jac_usable = self.jac_constant || theta <= tol.jacobian_reuse_contraction;
             let qt = h_new / h;
             if theta <= tol.jacobian_reuse_contraction && (QUOT1..=QUOT2).contains(&qt) {
                 h_new = h;

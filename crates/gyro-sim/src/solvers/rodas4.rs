@@ -5,7 +5,8 @@
 //! Per step: f(t, x); the Jacobian df/dx — the system's exact one when it provides it, else
 //! central differences (2n rhs calls, increment cbrt(eps)·max(|x_j|, 1e-2)); df/dt by a
 //! forward difference in t (1 rhs call; none when the system says it is autonomous, as a model
-//! on a stationary base does: the difference is then exactly zero); one LU of (1/(γh)) I − J
+//! on a stationary base does: the difference is then exactly zero); J once per run instead
+//! when the system says it is constant (a `linear` model); one LU of (1/(γh)) I − J
 //! (partial pivoting, `linalg`; a model's kinematic rows q̇ = v eliminated first, so an 8-state
 //! `full` model factors a 4-square matrix); 5 further rhs calls. The Jacobian is reused when a step is
 //! retried at a smaller h. The embedded 3rd-order solution gives the error estimate; step
@@ -79,6 +80,9 @@ pub(crate) struct Rodas4 {
     /// df/dx, row-major; valid for the current point while `jac_current`.
     jac: Vec<f64>,
     jac_current: bool,
+    /// J is the system's constant one (`OdeSystem::jacobian_is_constant`) and already formed:
+    /// it, and its kinematic rows, are not formed again.
+    jac_kept: bool,
     /// Kinematic rows of J (`IterationMatrix::kinematic_rows`), found when J is formed.
     kinematic: usize,
     /// (1/(γh)) I − J, factored.
@@ -105,6 +109,7 @@ impl Rodas4 {
             fx: vec![0.0; n],
             jac: vec![0.0; n * n],
             jac_current: false,
+            jac_kept: false,
             kinematic: 0,
             matrix: IterationMatrix::new(n),
             ak: std::array::from_fn(|_| vec![0.0; n]),
@@ -131,21 +136,24 @@ impl Rodas4 {
     ) {
         let n = self.n;
         let te = w.at(t);
-        stats.jacobian_evals += 1;
-        if !sys.jacobian(te, x, &mut self.jac) {
-            let [scratch, ..] = &mut self.ak;
-            difference_jacobian(
-                sys,
-                te,
-                x,
-                &mut self.jac,
-                &mut self.x_stage,
-                &mut self.dy,
-                scratch,
-                stats,
-            );
+        if !self.jac_kept {
+            stats.jacobian_evals += 1;
+            if !sys.jacobian(te, x, &mut self.jac) {
+                let [scratch, ..] = &mut self.ak;
+                difference_jacobian(
+                    sys,
+                    te,
+                    x,
+                    &mut self.jac,
+                    &mut self.x_stage,
+                    &mut self.dy,
+                    scratch,
+                    stats,
+                );
+            }
+            self.kinematic = IterationMatrix::kinematic_rows(&self.jac, n);
+            self.jac_kept = sys.jacobian_is_constant();
         }
-        self.kinematic = IterationMatrix::kinematic_rows(&self.jac, n);
         // df/dt by a forward difference, kept inside the segment; exactly zero, and not
         // computed, when f does not depend on t (the difference would be 0 to the bit).
         let delta = (f64::EPSILON * t.abs().max(1e-5)).sqrt();
