@@ -645,6 +645,83 @@ fn rodas4_skips_the_time_difference_of_an_autonomous_system() {
     );
 }
 
+/// A system as it is, but saying whether its Jacobian is constant as told.
+struct ConstantJacobian<P>(P, bool);
+impl<P: Problem> OdeSystem for ConstantJacobian<P> {
+    fn dim(&self) -> usize {
+        self.0.dim()
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], d: &mut [f64]) {
+        self.0.rhs(t, x, d)
+    }
+    fn jacobian(&mut self, t: f64, x: &[f64], jac: &mut [f64]) -> bool {
+        self.0.jacobian(t, x, jac)
+    }
+    fn is_autonomous(&self) -> bool {
+        self.0.is_autonomous()
+    }
+    fn jacobian_is_constant(&self) -> bool {
+        self.1
+    }
+}
+impl<P: Problem> Problem for ConstantJacobian<P> {
+    fn name(&self) -> &'static str {
+        self.0.name()
+    }
+    fn x0(&self) -> Vec<f64> {
+        self.0.x0()
+    }
+    fn exact(&self, t: f64) -> Vec<f64> {
+        self.0.exact(t)
+    }
+}
+
+/// RODAS4 and RADAU5 on a linear system that says its Jacobian is constant: J is formed once
+/// per run, and the run is the same to the bit (forming it again gives the same matrix; RADAU5's
+/// LUs at an unchanged h are the same ones, so it may factor less, never more).
+#[test]
+fn a_constant_jacobian_is_formed_once_and_changes_nothing_else() {
+    let t = tol(1e-6, 1e-9);
+    for method in [Method::Rodas4, Method::Radau5] {
+        let [told, kept] = [false, true].map(|constant| {
+            let mut p = ConstantJacobian(StiffOscillator::new(true), constant);
+            solve(&mut p, method, &t, 2000.0, 10.0, &[50.0])
+        });
+        let bits = |r: &Run| -> Vec<u64> {
+            r.samples
+                .iter()
+                .flat_map(|(t, x)| {
+                    std::iter::once(t.to_bits()).chain(x.iter().map(|v| v.to_bits()))
+                })
+                .collect()
+        };
+        assert_eq!(
+            bits(&told),
+            bits(&kept),
+            "{method}: keeping J changed the solution"
+        );
+        assert_eq!(told.stats.steps, kept.stats.steps, "{method}");
+        assert_eq!(
+            told.stats.rejected_steps, kept.stats.rejected_steps,
+            "{method}"
+        );
+        assert_eq!(told.stats.rhs_evals, kept.stats.rhs_evals, "{method}");
+        eprintln!(
+            "{method}: Jacobians {} -> {}, LUs {} -> {}",
+            told.stats.jacobian_evals,
+            kept.stats.jacobian_evals,
+            told.stats.lu_decompositions,
+            kept.stats.lu_decompositions
+        );
+        assert_eq!(kept.stats.jacobian_evals, 1, "{method}: J formed again");
+        assert!(
+            told.stats.jacobian_evals > 10,
+            "{method}: the test lost its point"
+        );
+        assert!(kept.stats.lu_decompositions <= told.stats.lu_decompositions);
+    }
+}
+
 /// The reason Rodas4 is here: slow motion plus fast lightly damped nutation. Rodas4 resolves
 /// the nutation while its transient is above the tolerance, then steps over it with steps of
 /// seconds (set by the slow mode), while Dopri5 stays capped by stability at ~3/ω for the whole
