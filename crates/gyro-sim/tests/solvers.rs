@@ -587,8 +587,9 @@ fn kepler_invariants_drift_is_small() {
     }
 }
 
-/// A system as it is, but saying whether it is autonomous as told.
-struct Claims<P>(P, bool);
+/// A system as it is, but saying whether it is autonomous (`.1`) and whether its Jacobian is
+/// constant (`.2`) as told.
+struct Claims<P>(P, bool, bool);
 impl<P: Problem> OdeSystem for Claims<P> {
     fn dim(&self) -> usize {
         self.0.dim()
@@ -601,6 +602,9 @@ impl<P: Problem> OdeSystem for Claims<P> {
     }
     fn is_autonomous(&self) -> bool {
         self.1
+    }
+    fn jacobian_is_constant(&self) -> bool {
+        self.2
     }
 }
 impl<P: Problem> Problem for Claims<P> {
@@ -615,22 +619,28 @@ impl<P: Problem> Problem for Claims<P> {
     }
 }
 
+/// A run's sample times and states as bits, to compare two runs exactly.
+fn sample_bits(r: &Run) -> Vec<u64> {
+    r.samples
+        .iter()
+        .flat_map(|(t, x)| std::iter::once(t.to_bits()).chain(x.iter().map(|v| v.to_bits())))
+        .collect()
+}
+
 /// RODAS4 on an autonomous system: ∂f/∂t is not differenced (one rhs call a Jacobian saved),
 /// and the run is the same to the bit, since the difference it skips is exactly zero.
 #[test]
 fn rodas4_skips_the_time_difference_of_an_autonomous_system() {
     let t = tol(1e-6, 1e-9);
     let [told, skipped] = [false, true].map(|autonomous| {
-        let mut p = Claims(StiffOscillator::new(true), autonomous);
+        let mut p = Claims(StiffOscillator::new(true), autonomous, false);
         solve(&mut p, Method::Rodas4, &t, 2000.0, 10.0, &[])
     });
-    let bits = |r: &Run| -> Vec<u64> {
-        r.samples
-            .iter()
-            .flat_map(|(t, x)| std::iter::once(t.to_bits()).chain(x.iter().map(|v| v.to_bits())))
-            .collect()
-    };
-    assert_eq!(bits(&told), bits(&skipped), "the skip changed the solution");
+    assert_eq!(
+        sample_bits(&told),
+        sample_bits(&skipped),
+        "the skip changed the solution"
+    );
     assert_eq!(told.stats.steps, skipped.stats.steps);
     assert_eq!(told.stats.rejected_steps, skipped.stats.rejected_steps);
     let saved = told.stats.rhs_evals - skipped.stats.rhs_evals;
@@ -645,37 +655,6 @@ fn rodas4_skips_the_time_difference_of_an_autonomous_system() {
     );
 }
 
-/// A system as it is, but saying whether its Jacobian is constant as told.
-struct ConstantJacobian<P>(P, bool);
-impl<P: Problem> OdeSystem for ConstantJacobian<P> {
-    fn dim(&self) -> usize {
-        self.0.dim()
-    }
-    fn rhs(&mut self, t: f64, x: &[f64], d: &mut [f64]) {
-        self.0.rhs(t, x, d)
-    }
-    fn jacobian(&mut self, t: f64, x: &[f64], jac: &mut [f64]) -> bool {
-        self.0.jacobian(t, x, jac)
-    }
-    fn is_autonomous(&self) -> bool {
-        self.0.is_autonomous()
-    }
-    fn jacobian_is_constant(&self) -> bool {
-        self.1
-    }
-}
-impl<P: Problem> Problem for ConstantJacobian<P> {
-    fn name(&self) -> &'static str {
-        self.0.name()
-    }
-    fn x0(&self) -> Vec<f64> {
-        self.0.x0()
-    }
-    fn exact(&self, t: f64) -> Vec<f64> {
-        self.0.exact(t)
-    }
-}
-
 /// RODAS4 and RADAU5 on a linear system that says its Jacobian is constant: J is formed once
 /// per run, and the run is the same to the bit (forming it again gives the same matrix; RADAU5's
 /// LUs at an unchanged h are the same ones, so it may factor less, never more).
@@ -684,20 +663,12 @@ fn a_constant_jacobian_is_formed_once_and_changes_nothing_else() {
     let t = tol(1e-6, 1e-9);
     for method in [Method::Rodas4, Method::Radau5] {
         let [told, kept] = [false, true].map(|constant| {
-            let mut p = ConstantJacobian(StiffOscillator::new(true), constant);
+            let mut p = Claims(StiffOscillator::new(true), false, constant);
             solve(&mut p, method, &t, 2000.0, 10.0, &[50.0])
         });
-        let bits = |r: &Run| -> Vec<u64> {
-            r.samples
-                .iter()
-                .flat_map(|(t, x)| {
-                    std::iter::once(t.to_bits()).chain(x.iter().map(|v| v.to_bits()))
-                })
-                .collect()
-        };
         assert_eq!(
-            bits(&told),
-            bits(&kept),
+            sample_bits(&told),
+            sample_bits(&kept),
             "{method}: keeping J changed the solution"
         );
         assert_eq!(told.stats.steps, kept.stats.steps, "{method}");

@@ -3,21 +3,32 @@
 //! in place, no allocation in the step loop. [`IterationMatrix`] and [`ComplexIterationMatrix`]
 //! factor c·I − J with a model's kinematic rows q̇ = v eliminated first.
 
+/// `match $n` over the sizes this module monomorphises (1 to 16, what models have): `$body` with
+/// the constant `$k` bound to the size (so arrays and loops have it at compile time), `$other`
+/// for any other size.
+macro_rules! by_size {
+    ($n:expr, $k:ident => $body:expr, _ => $other:expr) => {
+        by_size!(@arms $n, $k, $body, $other, [1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16])
+    };
+    (@arms $n:expr, $k:ident, $body:expr, $other:expr, [$($size:literal)*]) => {
+        match $n {
+            $($size => {
+                const $k: usize = $size;
+                $body
+            })*
+            _ => $other,
+        }
+    };
+}
+
 /// Factor the row-major n×n matrix `a` in place into L (unit lower, below the diagonal) and U
 /// (above it, with the reciprocals of its pivots on the diagonal). `piv` holds 2n entries: the
 /// row interchanges (row k was swapped with row `piv[k]`), then the permutation they make (row
 /// i of the permuted matrix is row `piv[n + i]` of `a`), which the solves gather by.
 /// Returns false if a zero pivot makes the matrix singular.
 pub(crate) fn lu_decompose(a: &mut [f64], n: usize, piv: &mut [usize]) -> bool {
-    macro_rules! sized {
-        ($($k:literal)*) => {
-            match n {
-                $($k => real_factorisation(&mut a[..$k * $k], $k, &mut piv[..2 * $k]),)*
-                _ => real_factorisation(a, n, piv),
-            }
-        };
-    }
-    sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+    by_size!(n, K => real_factorisation(&mut a[..K * K], K, &mut piv[..2 * K]),
+        _ => real_factorisation(a, n, piv))
 }
 
 #[inline(always)]
@@ -96,18 +107,10 @@ fn real_factorisation(a: &mut [f64], n: usize, piv: &mut [usize]) -> bool {
 /// RODAS4 0.932× wall; `speed-change-20kn` at `full` under RADAU5 rtol 1e-8 (16 states, its time
 /// mostly the right-hand side) 1.012× (1.003–1.027), a cost not traced.
 pub(crate) fn lu_solve(a: &[f64], n: usize, piv: &[usize], b: &mut [f64]) {
-    macro_rules! sized {
-        ($($k:literal)*) => {
-            match n {
-                $($k => lu_solve_sized::<$k>(a, piv, b),)*
-                _ => {
-                    interchange(&piv[..n], &mut b[..n]);
-                    real_substitution(a, n, &mut b[..n]);
-                }
-            }
-        };
-    }
-    sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+    by_size!(n, K => lu_solve_sized::<K>(a, piv, b), _ => {
+        interchange(&piv[..n], &mut b[..n]);
+        real_substitution(a, n, &mut b[..n]);
+    })
 }
 
 /// One size's solve, on a copy of `b` in an array (a function of its own per size: inlining all
@@ -216,26 +219,18 @@ pub(crate) fn lu_solve_complex(
     bi: &mut [f64],
 ) {
     // Monomorphised for the sizes the models have, as [`lu_solve`].
-    macro_rules! sized {
-        ($($k:literal)*) => {
-            match n {
-                $($k => {
-                    let perm = &piv[$k..2 * $k];
-                    let mut yr: [f64; $k] = std::array::from_fn(|i| br[perm[i]]);
-                    let mut yi: [f64; $k] = std::array::from_fn(|i| bi[perm[i]]);
-                    complex_substitution(&re[..$k * $k], &im[..$k * $k], $k, &mut yr, &mut yi);
-                    br[..$k].copy_from_slice(&yr);
-                    bi[..$k].copy_from_slice(&yi);
-                })*
-                _ => {
-                    interchange(&piv[..n], &mut br[..n]);
-                    interchange(&piv[..n], &mut bi[..n]);
-                    complex_substitution(re, im, n, &mut br[..n], &mut bi[..n]);
-                }
-            }
-        };
-    }
-    sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+    by_size!(n, K => {
+        let perm = &piv[K..2 * K];
+        let mut yr: [f64; K] = std::array::from_fn(|i| br[perm[i]]);
+        let mut yi: [f64; K] = std::array::from_fn(|i| bi[perm[i]]);
+        complex_substitution(&re[..K * K], &im[..K * K], K, &mut yr, &mut yi);
+        br[..K].copy_from_slice(&yr);
+        bi[..K].copy_from_slice(&yi);
+    }, _ => {
+        interchange(&piv[..n], &mut br[..n]);
+        interchange(&piv[..n], &mut bi[..n]);
+        complex_substitution(re, im, n, &mut br[..n], &mut bi[..n]);
+    })
 }
 
 /// The complex [`real_substitution`]: column-oriented, reciprocal pivots.
@@ -353,15 +348,9 @@ impl IterationMatrix {
             }
             return lu_decompose(&mut self.lu, n, &mut self.piv);
         }
-        macro_rules! sized {
-            ($($k:literal)*) => {
-                match r {
-                    $($k => self.reduced_factor::<$k>(jac, c),)*
-                    _ => unreachable!("kinematic rows are eliminated up to 16 remaining states"),
-                }
-            };
-        }
-        sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+        by_size!(r, R => self.reduced_factor::<R>(jac, c), _ => unreachable!(
+            "kinematic rows are eliminated up to 16 remaining states"
+        ))
     }
 
     /// The factorisation with m = `self.m` > 0 rows eliminated and R = n − m left: S and G
@@ -419,15 +408,9 @@ impl IterationMatrix {
         if m == 0 {
             return lu_solve(&self.lu[..r * r], r, &self.piv[..2 * r], &mut rhs[..r]);
         }
-        macro_rules! sized {
-            ($($k:literal)*) => {
-                match r {
-                    $($k => self.reduced_solve::<$k>(rhs),)*
-                    _ => unreachable!("kinematic rows are eliminated up to 16 remaining states"),
-                }
-            };
-        }
-        sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+        by_size!(r, R => self.reduced_solve::<R>(rhs), _ => unreachable!(
+            "kinematic rows are eliminated up to 16 remaining states"
+        ))
     }
 
     /// The solve with m > 0 rows eliminated and R = n − m left, R in registers: r₂ gathered by
@@ -569,15 +552,9 @@ impl ComplexIterationMatrix {
             let (re, im) = (&self.re[..r * r], &self.im[..r * r]);
             return lu_solve_complex(re, im, r, &self.piv[..2 * r], br, bi);
         }
-        macro_rules! sized {
-            ($($k:literal)*) => {
-                match r {
-                    $($k => self.reduced_solve::<$k>(br, bi),)*
-                    _ => unreachable!("kinematic rows are eliminated up to 16 remaining states"),
-                }
-            };
-        }
-        sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+        by_size!(r, R => self.reduced_solve::<R>(br, bi), _ => unreachable!(
+            "kinematic rows are eliminated up to 16 remaining states"
+        ))
     }
 
     fn reduced_solve<const R: usize>(&self, br: &mut [f64], bi: &mut [f64]) {
