@@ -74,12 +74,13 @@ pub trait Real:
 /// msun) rather than the platform's. `f64::sin_cos` reaches glibc's `sincos` through a call
 /// to the shared library; `libm::sincos` shares one range reduction and is compiled with the
 /// workspace (still a call of its own where it is used: `perf` shows it and its `rem_pio2` at
-/// 35 % and 4 % of the engine's Villarceau run at 5e-12). The functions alone (`cargo bench -p gyro-model --bench trig`): 5.4 ns a pair against
-/// 8.8 ns over a 90° swing. A whole Villarceau run, where the one pair is the right-hand side's
-/// only transcendental (`cargo bench -p gyro-sim --bench handwritten`, old and new binaries
-/// alternated): 0.87× through the engine, 0.89–0.91× hand-written, the same steps; whole
-/// scenes in docs/accuracy.md ("What limits gyrolab"). Both are faithfully rounded (they differ from
-/// glibc's in the last bit for ≈ 6 % of arguments). Everything that evaluates the equations —
+/// 35 % and 4 % of the engine's Villarceau run at 5e-12). The functions alone (`cargo bench
+/// -p gyro-model --bench trig`): 5.4 ns a pair against 8.8 ns over a 90° swing. A whole
+/// Villarceau run, where the one pair is the right-hand side's only transcendental (`cargo
+/// bench -p gyro-sim --bench handwritten`, old and new binaries alternated): 0.87× through the
+/// engine, 0.89–0.91× hand-written, the same steps; whole scenes in docs/accuracy.md ("What
+/// limits gyrolab"). Both are faithfully rounded (they differ from glibc's in the last bit for
+/// ≈ 6 % of arguments). Everything that evaluates the equations —
 /// the generic engine, the tapes, their native code and the hand-written references — uses
 /// these, so that their results agree to the bit where they did. Inlining a copy of its
 /// operations (the same bits on 14.6 M arguments in [−3, 3]) made the hand-written Villarceau
