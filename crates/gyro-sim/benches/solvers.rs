@@ -44,6 +44,7 @@ fn bench_solvers(c: &mut Criterion) {
     for method in [
         Method::Dopri5,
         Method::Dop853,
+        Method::Vern9,
         Method::Rk4 { step_s: 2e-3 },
         Method::Rodas4,
         Method::Radau5,

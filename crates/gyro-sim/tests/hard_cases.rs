@@ -72,7 +72,13 @@ fn integrate(
 
 /// Released at rest `amplitude` from the centre; after `periods` exact Villarceau periods the
 /// state must be the start again. Returns (phase-space error / amplitude, period).
-fn periodicity_error(sc: Scene, amplitude_deg: f64, periods: f64, rtol: f64) -> (f64, f64) {
+fn periodicity_error(
+    sc: Scene,
+    amplitude_deg: f64,
+    periods: f64,
+    method: Method,
+    rtol: f64,
+) -> (f64, f64) {
     let a = amplitude_deg.to_radians();
     let (sim, v, _) = foucault_release_scene(sc, a).unwrap_or_else(|e| panic!("{e}"));
     let period = v.period(a);
@@ -80,7 +86,7 @@ fn periodicity_error(sc: Scene, amplitude_deg: f64, periods: f64, rtol: f64) -> 
     let mut last = x0.clone();
     integrate(
         &sim,
-        Method::Dop853,
+        method,
         rtol,
         periods * period,
         periods * period,
@@ -184,6 +190,7 @@ fn latitude_89_9_matches_the_closed_forms() {
         foucault_scene("foucault-gyroscope", 89.9, "", 90.0),
         10.0,
         3.0,
+        Method::Dop853,
         1e-12,
     );
     assert!(
@@ -194,6 +201,7 @@ fn latitude_89_9_matches_the_closed_forms() {
         foucault_scene("foucault-gyroscope", 45.0, "", 90.0),
         10.0,
         1.0,
+        Method::Dop853,
         1e-10,
     );
     let expect = (45f64.to_radians().cos() / 89.9f64.to_radians().cos()).sqrt();
@@ -236,16 +244,23 @@ fn latitude_89_9_matches_the_closed_forms() {
 
 #[test]
 fn villarceau_period_holds_up_to_the_separatrix() {
-    // The period diverges like ln(8/(π − γ₀)): the state after exact periods is a sharp test.
-    for (amp, periods, bound) in [(179.0, 2.0, 1e-7), (179.9, 2.0, 1e-6), (179.99, 1.0, 1e-5)] {
-        let (err, period) = periodicity_error(
-            foucault_scene("foucault-gyroscope", 45.0, "", 90.0),
-            amp,
-            periods,
-            1e-13,
-        );
-        println!("γ₀ = {amp}°: T = {period:.6} s, periodicity error {err:.2e}");
-        assert!(err < bound, "γ₀ = {amp}°: error {err:e} ≥ {bound:e}");
+    // The period diverges like ln(8/(π − γ₀)): the state after exact periods is a sharp test,
+    // for both tight-tolerance methods.
+    for method in [Method::Dop853, Method::Vern9] {
+        for (amp, periods, bound) in [(179.0, 2.0, 1e-7), (179.9, 2.0, 1e-6), (179.99, 1.0, 1e-5)] {
+            let (err, period) = periodicity_error(
+                foucault_scene("foucault-gyroscope", 45.0, "", 90.0),
+                amp,
+                periods,
+                method,
+                1e-13,
+            );
+            println!("{method} γ₀ = {amp}°: T = {period:.6} s, periodicity error {err:.2e}");
+            assert!(
+                err < bound,
+                "{method} γ₀ = {amp}°: error {err:e} ≥ {bound:e}"
+            );
+        }
     }
     // On the separatrix's saddle (γ₀ = 180° exactly) the ring stays: the unstable equilibrium
     // is kept to round-off amplified by e^(ω₀ t).
@@ -254,10 +269,15 @@ fn villarceau_period_holds_up_to_the_separatrix() {
     let x0 = sim.model.x0[0];
     let mut worst: f64 = 0.0;
     let t_end = 6.0 / v.g_over_a.sqrt(); // six e-foldings
-    integrate(&sim, Method::Dop853, 1e-12, 1.0, t_end, |_, x| {
-        worst = worst.max((x[0] - x0).abs())
-    });
-    assert!(worst < 1e-9, "the saddle drifted by {worst:e} rad");
+    for method in [Method::Dop853, Method::Vern9] {
+        integrate(&sim, method, 1e-12, 1.0, t_end, |_, x| {
+            worst = worst.max((x[0] - x0).abs())
+        });
+        assert!(
+            worst < 1e-9,
+            "{method}: the saddle drifted by {worst:e} rad"
+        );
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -491,15 +511,23 @@ fn cgs_and_kgf_designs_keep_villarceau_exact() {
     // SI numbers from 3e-9 kg·m² (CGS micro top) to 8e2 kg·m² (kgf·m·s ship-sized gyroscope),
     // spins from 94 to 6 283 rad/s, Earth rate 7e-5 rad/s.
     for design in ["foucault-top-cgs", "foucault-heavy-kgf"] {
-        for amp in [10.0, 170.0] {
-            let (err, period) =
-                periodicity_error(foucault_scene(design, 45.0, "", 90.0), amp, 3.0, 1e-12);
-            println!("{design} γ₀ = {amp}°: T = {period:.6} s, periodicity error {err:.2e}");
-            assert!(err < 1e-8, "{design}, γ₀ = {amp}°: error {err:e}");
+        for method in [Method::Dop853, Method::Vern9] {
+            for amp in [10.0, 170.0] {
+                let sc = foucault_scene(design, 45.0, "", 90.0);
+                let (err, period) = periodicity_error(sc, amp, 3.0, method, 1e-12);
+                println!(
+                    "{design} {method} γ₀ = {amp}°: T = {period:.6} s, periodicity error {err:.2e}"
+                );
+                assert!(err < 1e-8, "{design} {method}, γ₀ = {amp}°: error {err:e}");
+            }
+            // The latitude gyroscope exercises δ ≠ 0 (A + A′ − B′).
+            let sc = foucault_scene(design, 45.0, "", 0.0);
+            let (err, _) = periodicity_error(sc, 90.0, 3.0, method, 1e-12);
+            assert!(
+                err < 1e-8,
+                "{design} {method} latitude gyroscope: error {err:e}"
+            );
         }
-        // The latitude gyroscope exercises δ ≠ 0 (A + A′ − B′).
-        let (err, _) = periodicity_error(foucault_scene(design, 45.0, "", 0.0), 90.0, 3.0, 1e-12);
-        assert!(err < 1e-8, "{design} latitude gyroscope: error {err:e}");
     }
     let micro = foucault_scene("foucault-top-cgs", 45.0, "", 90.0);
     let heavy = foucault_scene("foucault-heavy-kgf", 45.0, "", 90.0);

@@ -75,6 +75,7 @@ fn allocations_do_not_grow_with_steps() {
     for method in [
         Method::Dopri5,
         Method::Dop853,
+        Method::Vern9,
         Method::Rk4 { step_s: 1e-2 },
         Method::Rodas4,
         Method::Radau5,

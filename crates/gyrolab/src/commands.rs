@@ -48,7 +48,7 @@ pub struct RunArgs {
     /// full, gyroscopic or linear.
     #[arg(long)]
     pub fidelity: Option<String>,
-    /// dopri5, dop853, rk4[:step_s], rodas4 or radau5.
+    /// dopri5, dop853, vern9, rk4[:step_s], rodas4 or radau5.
     #[arg(long)]
     pub integrator: Option<String>,
     #[arg(long)]
@@ -84,7 +84,7 @@ fn overrides(a: &RunArgs) -> Result<SceneOverrides, CliError> {
     let method = match &a.integrator {
         Some(m) => Some(m.parse::<Method>().map_err(|e| {
             bad(format!(
-                "--integrator: {e} (allowed: dopri5, dop853, rk4[:step_s], rodas4, radau5)"
+                "--integrator: {e} (allowed: dopri5, dop853, vern9, rk4[:step_s], rodas4, radau5)"
             ))
         })?),
         None => None,
@@ -688,7 +688,7 @@ pub fn accuracy(a: AccuracyArgs) -> Result<ExitCode, CliError> {
             .map(|m| {
                 m.parse::<Method>().map_err(|e| {
                     bad(format!(
-                        "--methods: {e} (allowed: dopri5, dop853, rk4, rodas4, radau5)"
+                        "--methods: {e} (allowed: dopri5, dop853, vern9, rk4, rodas4, radau5)"
                     ))
                 })
             })

@@ -315,6 +315,9 @@ impl Case {
                         Method::Rk4 { step_s } => 4.0 * self.t_end / step_s,
                         Method::Dopri5 => 6.0 * self.t_end * rho / 3.3,
                         Method::Dop853 => 12.0 * self.t_end * rho / 6.0,
+                        // Verner's 9(8): |R(−x)| ≤ 1 up to x ≈ 4.48 (its stability
+                        // polynomial from the tableau).
+                        Method::Vern9 => 16.0 * self.t_end * rho / 4.48,
                         Method::Rodas4 | Method::Radau5 => 0.0,
                     };
                     if predicted * rhs_cost > opts.max_point_s {

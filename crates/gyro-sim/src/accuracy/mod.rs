@@ -84,6 +84,7 @@ impl Default for StudyOptions {
             methods: vec![
                 Method::Dopri5,
                 Method::Dop853,
+                Method::Vern9,
                 Method::Rodas4,
                 Method::Radau5,
                 Method::Rk4 {

@@ -173,6 +173,7 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
         };
         for method in [
             Method::Dop853,
+            Method::Vern9,
             Method::Dopri5,
             Method::Rodas4,
             Method::Radau5,

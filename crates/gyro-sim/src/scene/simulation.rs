@@ -156,7 +156,7 @@ pub(super) fn solver(
                 Some("[simulation]"),
                 key,
                 &format!("simulation.{key}"),
-                format!("{e} (allowed: dopri5, dop853, rk4[:step_s], rodas4, radau5)"),
+                format!("{e} (allowed: dopri5, dop853, vern9, rk4[:step_s], rodas4, radau5)"),
             )
         })
     };

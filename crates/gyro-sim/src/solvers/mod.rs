@@ -10,6 +10,7 @@
 //!
 //! - `dopri5`: Dormand–Prince 5(4), FSAL, 4th-order dense output (Hairer's DOPRI5).
 //! - `dop853`: Dormand–Prince 8(5,3) with 7th-order dense output (Hairer's DOP853).
+//! - `vern9`: Verner's 9(8) pair with its 9th-order interpolant (tight tolerances).
 //! - `rk4`: classic fixed-step RK4, cubic Hermite dense output (the baseline).
 //! - `rodas4`: Hairer–Wanner RODAS, L-stable Rosenbrock 4(3), 3rd-order dense output (stiff).
 //! - `radau5`: Hairer–Wanner RADAU5, 3-stage Radau IIA (implicit, order 5, L-stable), its
@@ -32,6 +33,8 @@ mod radau5;
 mod rk4;
 #[allow(clippy::excessive_precision, clippy::needless_range_loop)]
 mod rodas4;
+#[allow(clippy::excessive_precision, clippy::needless_range_loop)]
+mod vern9;
 
 use std::fmt;
 use std::ops::ControlFlow;
@@ -122,6 +125,9 @@ pub enum Method {
     Dopri5,
     /// Dormand–Prince 8(5,3), adaptive; cheaper than `Dopri5` at tight tolerances (≲1e-8).
     Dop853,
+    /// Verner 9(8), adaptive; for the tightest tolerances on smooth problems (≲1e-10), where
+    /// its order 9 takes fewer rhs calls than `Dop853` for the same achieved error.
+    Vern9,
     /// Classic RK4 at a fixed step (shortened only at breakpoints and at the end); tolerances
     /// are not used for error control.
     Rk4 { step_s: f64 },
@@ -139,12 +145,14 @@ impl Method {
 }
 
 impl fmt::Display for Method {
-    /// `"dopri5"`, `"dop853"`, `"rk4"`, `"rodas4"`, `"radau5"`. The RK4 step is not printed; the alternate
+    /// `"dopri5"`, `"dop853"`, `"vern9"`, `"rk4"`, `"rodas4"`, `"radau5"`. The RK4 step is not
+    /// printed; the alternate
     /// form (`{:#}`) prints it as `"rk4:<step_s>"`, which `FromStr` reads back.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Method::Dopri5 => f.write_str("dopri5"),
             Method::Dop853 => f.write_str("dop853"),
+            Method::Vern9 => f.write_str("vern9"),
             Method::Rk4 { step_s } if f.alternate() => write!(f, "rk4:{step_s}"),
             Method::Rk4 { .. } => f.write_str("rk4"),
             Method::Rodas4 => f.write_str("rodas4"),
@@ -156,13 +164,14 @@ impl fmt::Display for Method {
 impl FromStr for Method {
     type Err = SolveError;
 
-    /// Case-insensitive `"dopri5"`, `"dop853"`, `"rodas4"`, `"radau5"`, `"rk4"` (step
+    /// Case-insensitive `"dopri5"`, `"dop853"`, `"vern9"`, `"rodas4"`, `"radau5"`, `"rk4"` (step
     /// [`Method::DEFAULT_RK4_STEP_S`]) or `"rk4:<step_s>"`.
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let lower = s.trim().to_ascii_lowercase();
         match lower.as_str() {
             "dopri5" => Ok(Method::Dopri5),
             "dop853" => Ok(Method::Dop853),
+            "vern9" => Ok(Method::Vern9),
             "rodas4" => Ok(Method::Rodas4),
             "radau5" => Ok(Method::Radau5),
             "rk4" => Ok(Method::Rk4 {
@@ -173,7 +182,7 @@ impl FromStr for Method {
                     Ok(Method::Rk4 { step_s })
                 }
                 _ => Err(SolveError::InvalidOptions(format!(
-                    "unknown method {s:?} (expected dopri5, dop853, rk4, rk4:<step_s>, rodas4, radau5)"
+                    "unknown method {s:?} (expected dopri5, dop853, vern9, rk4, rk4:<step_s>, rodas4, radau5)"
                 ))),
             },
         }
@@ -328,6 +337,16 @@ pub fn integrate<S: OdeSystem>(
         ),
         Method::Dop853 => run(
             &mut dop853::Dop853::new(n),
+            sys,
+            tol,
+            x,
+            grid,
+            &segment_ends,
+            &mut observer,
+            &mut stats,
+        ),
+        Method::Vern9 => run(
+            &mut vern9::Vern9::new(n),
             sys,
             tol,
             x,
