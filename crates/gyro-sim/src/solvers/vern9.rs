@@ -9,8 +9,9 @@
 //! Numer. Algorithms 53 (2010) 383–396, his 9(8) IIa pair and its order-9 interpolant, as
 //! double-precision numbers (the values tabulated by SciML's OrdinaryDiffEq.jl, MIT). Stage
 //! indices below are 0-based: stages 0..15 are the step's, 16 is f at the new point (its
-//! coefficient row is b) and 17..25 the interpolant's. `solvers::vern9_*` tests hold the rows to
-//! their abscissae, the interpolant to b at θ = 1, and the pair to order 9.
+//! coefficient row is b) and 17..25 the interpolant's. The unit tests below hold the rows to
+//! their abscissae and the tables to the 486 order conditions up to order 9 (b, the embedded
+//! weights to order 8, the interpolant at two points).
 
 use super::{
     Attempt, InitialStepScratch, OdeSystem, PiController, SolveError, SolverStats, Stepper,
@@ -704,6 +705,8 @@ impl Stepper for Vern9 {
         stats.rhs_evals += 9;
     }
 
+    /// Ends on the step's own new point: after a projection moved it (`keep_jacobi_integral`)
+    /// the samples inside the step keep the unprojected arc, off by the projection's correction.
     fn dense(&self, x_old: &[f64], theta: f64, h: f64, out: &mut [f64]) {
         let n = self.n;
         // b_j(θ) by Horner, once per sample.
