@@ -71,15 +71,55 @@ pub fn from_toml(file: &str, text: &str, e: &toml::de::Error) -> InputError {
         .span()
         .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
     let msg = e.message().to_string();
-    let key = msg
-        .split('`')
-        .nth(1)
-        .map(str::to_string)
-        .unwrap_or_else(|| "(document)".to_string());
+    // The first back-quoted name is the key only in messages about a field; in others
+    // ("unknown variant `x`") it is a value, and the key is the one written on the line.
+    let quoted = msg.split('`').nth(1).map(str::to_string);
+    let on_line = line.and_then(|l| key_on_line(text, l));
+    let about_field = ["unknown field", "missing field", "duplicate key"]
+        .iter()
+        .any(|p| msg.starts_with(p));
+    let key = if about_field {
+        quoted.or(on_line)
+    } else {
+        on_line.or(quoted)
+    }
+    .unwrap_or_else(|| "(document)".to_string());
     InputError {
         file: file.to_string(),
         line,
         key,
         message: msg,
     }
+}
+
+/// The dotted key written on 1-based line `line` of a TOML text (`table.key` under a
+/// `[table]` or `[[table]]` header), for errors whose message names no key (a value of the
+/// wrong type says only what it expected).
+fn key_on_line(text: &str, line: usize) -> Option<String> {
+    let lines: Vec<&str> = text.lines().collect();
+    let here = lines.get(line.checked_sub(1)?)?.trim();
+    if here.starts_with('[') || here.starts_with('#') {
+        return None;
+    }
+    let (key, _) = here.split_once('=')?;
+    let key = key.trim().trim_matches('"');
+    if key.is_empty() {
+        return None;
+    }
+    let table = lines[..line - 1]
+        .iter()
+        .rev()
+        .map(|l| l.trim())
+        .find(|l| l.starts_with('['))
+        .map(|l| {
+            l.trim_start_matches('[')
+                .split(']')
+                .next()
+                .unwrap_or("")
+                .trim()
+        });
+    Some(match table {
+        Some(t) if !t.is_empty() => format!("{t}.{key}"),
+        _ => key.to_string(),
+    })
 }

@@ -103,6 +103,21 @@ fn scene(lat: &str, extra_sim: &str, program: &str) -> String {
     )
 }
 
+/// A value of the wrong type is named by its dotted key and line, though the parser's own
+/// message says only what it expected.
+#[test]
+fn a_value_of_the_wrong_type_names_its_key() {
+    let text = scene("50.0", "", "").replace("duration_s = 100.0", "duration_s = \"long\"");
+    let e = scene_error(&text);
+    assert_eq!(e.key, "duration_s", "{e}");
+    assert_eq!(e.line, Some(line_of(&text, "duration_s")), "{e}");
+    assert!(e.message.contains("expected f64"), "{e}");
+    let text = scene("\"north\"", "", "");
+    let e = scene_error(&text);
+    assert_eq!(e.key, "start.latitude_deg", "{e}");
+    assert_eq!(e.line, Some(line_of(&text, "latitude_deg")), "{e}");
+}
+
 #[test]
 fn latitude_at_or_beyond_the_pole_is_refused() {
     for lat in ["90.0", "-90.0", "91.5"] {
@@ -137,7 +152,18 @@ fn unknown_effect_and_fidelity_are_refused() {
         "{e}"
     );
     let e = scene_error(&scene("50.0", "integrator = \"euler\"", ""));
-    assert!(e.message.contains("rodas4"), "{e}");
+    assert!(
+        e.message.contains("allowed:") && e.message.contains("rodas4"),
+        "{e}"
+    );
+    // A fixed rk4 step that is not a positive number of seconds is named as such.
+    for bad in ["rk4:-1", "rk4:0", "rk4:fast", "rk4:inf"] {
+        let e = scene_error(&scene("50.0", &format!("integrator = \"{bad}\""), ""));
+        assert!(
+            e.message.contains("positive number of seconds") && e.key == "simulation.integrator",
+            "{bad}: {e}"
+        );
+    }
     // Checked when the file loads, though this run is gyroscopic and would never use it.
     let text = scene("50.0", "full_integrator = \"euler\"", "");
     let e = scene_error(&text);

@@ -151,12 +151,12 @@ pub(super) fn solver(
         })?,
     };
     let parse = |key: &str, value: &str| -> Result<Method, InputError> {
-        value.parse().map_err(|e| {
+        value.parse::<Method>().map_err(|e| {
             src.err(
                 Some("[simulation]"),
                 key,
                 &format!("simulation.{key}"),
-                format!("{e} (allowed: dopri5, dop853, vern9, rk4[:step_s], rodas4, radau5)"),
+                e.to_string(),
             )
         })
     };

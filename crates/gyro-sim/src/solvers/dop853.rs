@@ -9,7 +9,7 @@
 
 use super::{
     Attempt, InitialStepScratch, OdeSystem, PiController, SolveError, SolverStats, Stepper,
-    Tolerances, Window, initial_step,
+    Tolerances, Window, initial_step, start_derivative,
 };
 
 const STAGES: usize = 16;
@@ -285,13 +285,8 @@ impl Stepper for Dop853 {
         x: &[f64],
         stats: &mut SolverStats,
     ) -> Result<(), SolveError> {
-        sys.rhs(w.at(t), x, &mut self.k[..self.n]);
-        stats.rhs_evals += 1;
         self.control.reset();
-        if self.k[..self.n].iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::NonFiniteState { t });
-        }
-        Ok(())
+        start_derivative(sys, w, t, x, &mut self.k[..self.n], stats)
     }
 
     fn first_step<S: OdeSystem>(

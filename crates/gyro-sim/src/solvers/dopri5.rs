@@ -5,7 +5,7 @@
 
 use super::{
     Attempt, InitialStepScratch, OdeSystem, PiController, SolveError, SolverStats, Stepper,
-    Tolerances, Window, error_norm, initial_step,
+    Tolerances, Window, error_norm, initial_step, start_derivative,
 };
 
 const C2: f64 = 1.0 / 5.0;
@@ -83,13 +83,8 @@ impl Stepper for Dopri5 {
         x: &[f64],
         stats: &mut SolverStats,
     ) -> Result<(), SolveError> {
-        sys.rhs(w.at(t), x, &mut self.k[0]);
-        stats.rhs_evals += 1;
         self.control.reset();
-        if self.k[0].iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::NonFiniteState { t });
-        }
-        Ok(())
+        start_derivative(sys, w, t, x, &mut self.k[0], stats)
     }
 
     fn first_step<S: OdeSystem>(

@@ -179,12 +179,15 @@ impl FromStr for Method {
             "rk4" => Ok(Method::Rk4 {
                 step_s: Method::DEFAULT_RK4_STEP_S,
             }),
-            other => match other.strip_prefix("rk4:").map(str::parse::<f64>) {
-                Some(Ok(step_s)) if step_s.is_finite() && step_s > 0.0 => {
-                    Ok(Method::Rk4 { step_s })
-                }
-                _ => Err(SolveError::InvalidOptions(format!(
-                    "unknown method {s:?} (expected dopri5, dop853, vern9, rk4, rk4:<step_s>, rodas4, radau5)"
+            other => match other.strip_prefix("rk4:") {
+                Some(step) => match step.parse::<f64>() {
+                    Ok(step_s) if step_s.is_finite() && step_s > 0.0 => Ok(Method::Rk4 { step_s }),
+                    _ => Err(SolveError::InvalidOptions(format!(
+                        "method {s:?}: the rk4 step after the colon must be a positive number of seconds"
+                    ))),
+                },
+                None => Err(SolveError::InvalidOptions(format!(
+                    "unknown method {s:?} (allowed: dopri5, dop853, vern9, rk4, rk4:<step_s>, rodas4, radau5)"
                 ))),
             },
         }
@@ -733,6 +736,24 @@ fn run<S: OdeSystem, St: Stepper>(
         seg_start = seg_end;
     }
     Ok(StopReason::Finished)
+}
+
+/// The derivative f(t, x) at a segment start into `f0`, counted, and refused when it is not
+/// finite: what every stepper's `reset` evaluates before its own bookkeeping.
+pub(crate) fn start_derivative<S: OdeSystem>(
+    sys: &mut S,
+    w: Window,
+    t: f64,
+    x: &[f64],
+    f0: &mut [f64],
+    stats: &mut SolverStats,
+) -> Result<(), SolveError> {
+    sys.rhs(w.at(t), x, f0);
+    stats.rhs_evals += 1;
+    if f0.iter().any(|v| !v.is_finite()) {
+        return Err(SolveError::NonFiniteState { t });
+    }
+    Ok(())
 }
 
 /// RMS of err_i / (atol + rtol * max(|x_i|, |x_new_i|)).

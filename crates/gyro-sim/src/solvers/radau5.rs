@@ -46,7 +46,7 @@
 use super::linalg::{ComplexIterationMatrix, IterationMatrix};
 use super::{
     Attempt, InitialStepScratch, OdeSystem, SolveError, SolverStats, Stepper, Tolerances, Window,
-    difference_jacobian, initial_step,
+    difference_jacobian, initial_step, start_derivative,
 };
 
 /// c₁ = (4 − √6)/10.
@@ -462,8 +462,6 @@ impl Stepper for Radau5 {
         x: &[f64],
         stats: &mut SolverStats,
     ) -> Result<(), SolveError> {
-        sys.rhs(w.at(t), x, &mut self.f0);
-        stats.rhs_evals += 1;
         self.f0_current = true;
         self.jac_fresh = false;
         self.jac_usable = self.jac_constant;
@@ -473,10 +471,7 @@ impl Stepper for Radau5 {
         self.faccon = 1.0;
         self.singular_in_row = 0;
         self.previous = None;
-        if self.f0.iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::NonFiniteState { t });
-        }
-        Ok(())
+        start_derivative(sys, w, t, x, &mut self.f0, stats)
     }
 
     fn first_step<S: OdeSystem>(

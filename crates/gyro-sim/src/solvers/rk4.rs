@@ -3,7 +3,9 @@
 //! step's end values and slopes; the end slope is reused as the next step's first stage, so a
 //! step costs 4 rhs calls. Tolerances are not used.
 
-use super::{Attempt, OdeSystem, SolveError, SolverStats, Stepper, Tolerances, Window};
+use super::{
+    Attempt, OdeSystem, SolveError, SolverStats, Stepper, Tolerances, Window, start_derivative,
+};
 
 pub(crate) struct Rk4 {
     step_s: f64,
@@ -36,12 +38,7 @@ impl Stepper for Rk4 {
         x: &[f64],
         stats: &mut SolverStats,
     ) -> Result<(), SolveError> {
-        sys.rhs(w.at(t), x, &mut self.k[0]);
-        stats.rhs_evals += 1;
-        if self.k[0].iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::NonFiniteState { t });
-        }
-        Ok(())
+        start_derivative(sys, w, t, x, &mut self.k[0], stats)
     }
 
     fn first_step<S: OdeSystem>(

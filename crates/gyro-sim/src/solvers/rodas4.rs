@@ -16,7 +16,7 @@
 use super::linalg::IterationMatrix;
 use super::{
     Attempt, InitialStepScratch, OdeSystem, SolveError, SolverStats, Stepper, Tolerances, Window,
-    difference_jacobian, error_norm, initial_step,
+    difference_jacobian, error_norm, initial_step, start_derivative,
 };
 
 const C2: f64 = 0.386;
@@ -211,17 +211,12 @@ impl Stepper for Rodas4 {
         x: &[f64],
         stats: &mut SolverStats,
     ) -> Result<(), SolveError> {
-        sys.rhs(w.at(t), x, &mut self.f0);
-        stats.rhs_evals += 1;
         self.f0_current = true;
         self.jac_current = false;
         self.previous = None;
         self.last_rejected = false;
         self.singular_in_row = 0;
-        if self.f0.iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::NonFiniteState { t });
-        }
-        Ok(())
+        start_derivative(sys, w, t, x, &mut self.f0, stats)
     }
 
     fn first_step<S: OdeSystem>(

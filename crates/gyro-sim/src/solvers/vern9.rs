@@ -15,7 +15,7 @@
 
 use super::{
     Attempt, InitialStepScratch, OdeSystem, PiController, SolveError, SolverStats, Stepper,
-    Tolerances, Window, error_norm, initial_step,
+    Tolerances, Window, error_norm, initial_step, start_derivative,
 };
 
 const STAGES: usize = 26;
@@ -599,13 +599,8 @@ impl Stepper for Vern9 {
         x: &[f64],
         stats: &mut SolverStats,
     ) -> Result<(), SolveError> {
-        sys.rhs(w.at(t), x, &mut self.k[..self.n]);
-        stats.rhs_evals += 1;
         self.control.reset();
-        if self.k[..self.n].iter().any(|v| !v.is_finite()) {
-            return Err(SolveError::NonFiniteState { t });
-        }
-        Ok(())
+        start_derivative(sys, w, t, x, &mut self.k[..self.n], stats)
     }
 
     fn first_step<S: OdeSystem>(
