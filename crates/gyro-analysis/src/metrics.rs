@@ -18,6 +18,7 @@ use crate::ballistic::{
     schuler_period_s,
 };
 use crate::error::{AnalysisError, Result};
+use crate::file::write_whole;
 use crate::fit::{FitOptions, OscillationFit, Quality, decimate, fit_damped_sinusoid};
 use crate::load::{
     COMPASS_TOPIC, LoadOptions, Run, SHIP_TOPIC, SOLVER_TOPIC, expand_inputs, load_run,
@@ -282,39 +283,42 @@ impl MetricsTable {
     /// Writes CSV.
     pub fn write_csv(&self, path: &Path) -> Result<()> {
         let mut df = self.to_dataframe()?;
-        let mut file = File::create(path).map_err(AnalysisError::io(path, "creating"))?;
-        CsvWriter::new(&mut file)
-            .finish(&mut df)
-            .map_err(AnalysisError::polars(format!(
-                "{}: writing CSV",
-                path.display()
-            )))
+        write_whole(path, |file| {
+            CsvWriter::new(file)
+                .finish(&mut df)
+                .map_err(AnalysisError::polars(format!(
+                    "{}: writing CSV",
+                    path.display()
+                )))
+        })
     }
 
     /// Writes JSON (an array of row objects).
     pub fn write_json(&self, path: &Path) -> Result<()> {
         let mut df = self.to_dataframe()?;
-        let mut file = File::create(path).map_err(AnalysisError::io(path, "creating"))?;
-        JsonWriter::new(&mut file)
-            .with_json_format(JsonFormat::Json)
-            .finish(&mut df)
-            .map_err(AnalysisError::polars(format!(
-                "{}: writing JSON",
-                path.display()
-            )))
+        write_whole(path, |file| {
+            JsonWriter::new(file)
+                .with_json_format(JsonFormat::Json)
+                .finish(&mut df)
+                .map_err(AnalysisError::polars(format!(
+                    "{}: writing JSON",
+                    path.display()
+                )))
+        })
     }
 
     /// Writes Parquet.
     pub fn write_parquet(&self, path: &Path) -> Result<()> {
         let mut df = self.to_dataframe()?;
-        let file = File::create(path).map_err(AnalysisError::io(path, "creating"))?;
-        ParquetWriter::new(file)
-            .finish(&mut df)
-            .map(|_| ())
-            .map_err(AnalysisError::polars(format!(
-                "{}: writing Parquet",
-                path.display()
-            )))
+        write_whole(path, |file| {
+            ParquetWriter::new(file)
+                .finish(&mut df)
+                .map(|_| ())
+                .map_err(AnalysisError::polars(format!(
+                    "{}: writing Parquet",
+                    path.display()
+                )))
+        })
     }
 
     /// Writes `<stem>.csv`, `<stem>.json` and `<stem>.parquet`; returns the paths.

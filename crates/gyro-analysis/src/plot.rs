@@ -7,9 +7,11 @@
 //! machine renders the same picture.
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::error::{AnalysisError, Result};
+use crate::file::write_whole;
 
 /// Ten well-separated colours (matplotlib's tab10).
 pub const PALETTE: [[u8; 3]; 10] = [
@@ -193,13 +195,20 @@ impl Figure {
     pub fn write(&self, stem: &Path) -> Result<(PathBuf, PathBuf)> {
         let svg = stem.with_extension("svg");
         let png = stem.with_extension("png");
-        std::fs::write(&svg, self.to_svg()).map_err(AnalysisError::io(&svg, "writing"))?;
+        let text = self.to_svg();
+        write_whole(&svg, |w| {
+            w.write_all(text.as_bytes())
+                .map_err(AnalysisError::io(&svg, "writing"))
+        })?;
         let bytes = self.to_png().map_err(|e| AnalysisError::Io {
             path: png.clone(),
             action: "encoding PNG",
             source: std::io::Error::other(e),
         })?;
-        std::fs::write(&png, bytes).map_err(AnalysisError::io(&png, "writing"))?;
+        write_whole(&png, |w| {
+            w.write_all(&bytes)
+                .map_err(AnalysisError::io(&png, "writing"))
+        })?;
         Ok((svg, png))
     }
 

@@ -14,11 +14,13 @@
 //! ```
 
 use std::collections::BTreeMap;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::{AnalysisError, Result};
+use crate::file::write_whole;
 use crate::metrics::{Cell, MetricsTable, RunMetrics, format_number};
 use crate::table::{Align, Table};
 
@@ -133,7 +135,10 @@ impl Baseline {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(AnalysisError::io(dir, "creating"))?;
         }
-        std::fs::write(path, text).map_err(AnalysisError::io(path, "writing"))
+        write_whole(path, |w| {
+            w.write_all(text.as_bytes())
+                .map_err(AnalysisError::io(path, "writing"))
+        })
     }
 }
 

@@ -442,6 +442,13 @@ fn fallback_rrd(first: &Path) -> PathBuf {
     first.with_extension("rrd")
 }
 
+/// Where a saved `.rrd` is written until it is whole: `<path>.partial`.
+fn partial(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".partial");
+    path.with_file_name(name)
+}
+
 /// Views recordings: logs them with [`default_fit`] and sends them to `opts.sink`.
 pub fn view(runs: &[PathBuf], opts: &ViewOptions) -> Result<ViewReport, ViewError> {
     view_with_fit(runs, opts, default_fit())
@@ -458,9 +465,11 @@ pub fn view_with_fit(
     let first = runs.first().ok_or(ViewError::NoRuns)?;
     let mut notes = Vec::new();
     let builder = RecordingStreamBuilder::new(APPLICATION_ID).default_enabled(true);
+    // A saved file is written under `<name>.partial` and renamed when whole: a run that fails
+    // half-way (an unreadable recording, a full disk) leaves no `.rrd` under the final name.
     let (rec, output) = match &opts.sink {
         Sink::Save(path) => (
-            builder.save(path)?,
+            builder.save(partial(path))?,
             Output::Saved {
                 path: path.clone(),
                 bytes: 0,
@@ -485,20 +494,37 @@ pub fn view_with_fit(
                     path.display(),
                     path.display()
                 ));
-                (builder.save(&path)?, Output::Saved { path, bytes: 0 })
+                (
+                    builder.save(partial(&path))?,
+                    Output::Saved { path, bytes: 0 },
+                )
             }
         }
     };
-    let summaries = log_runs(&rec, runs, opts, fit)?;
-    if opts.blueprint {
-        let roots: Vec<String> = summaries.iter().map(|s| s.entity.clone()).collect();
-        send_layout(&rec, &blueprint(&roots, opts))?;
-    }
-    rec.flush_blocking()?;
+    let logged = (|| -> Result<_, ViewError> {
+        let summaries = log_runs(&rec, runs, opts, fit)?;
+        if opts.blueprint {
+            let roots: Vec<String> = summaries.iter().map(|s| s.entity.clone()).collect();
+            send_layout(&rec, &blueprint(&roots, opts))?;
+        }
+        rec.flush_blocking()?;
+        Ok(summaries)
+    })();
     drop(rec);
+    let summaries = match logged {
+        Ok(s) => s,
+        Err(e) => {
+            if let Output::Saved { path, .. } = &output {
+                let _ = std::fs::remove_file(partial(path));
+            }
+            return Err(e);
+        }
+    };
     let output = match output {
         Output::Saved { path, .. } => {
-            let bytes = std::fs::metadata(&path)
+            let tmp = partial(&path);
+            let bytes = std::fs::rename(&tmp, &path)
+                .and_then(|()| std::fs::metadata(&path))
                 .map_err(|source| ViewError::Io {
                     path: path.clone(),
                     source,

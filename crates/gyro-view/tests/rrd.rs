@@ -106,6 +106,37 @@ fn true_fit() -> DampedSinusoid {
     }
 }
 
+/// A view that fails part-way (here on its second recording, not an MCAP file) leaves no
+/// `.rrd` under the final name and no `.partial` beside it; an `.rrd` already there from an
+/// earlier view is left as it was. One that succeeds leaves only the final file.
+#[test]
+fn a_failed_view_leaves_no_rrd_behind() {
+    let dir = workdir("failed");
+    let good = dir.join("good.mcap");
+    common::write_recording(&good, SAMPLES, RATE_HZ);
+    let junk = dir.join("junk.mcap");
+    std::fs::write(&junk, b"not an MCAP file at all").expect("junk");
+    let rrd = dir.join("out.rrd");
+    let partial = dir.join("out.rrd.partial");
+    let opts = ViewOptions {
+        sink: Sink::Save(rrd.clone()),
+        ..Default::default()
+    };
+    let e = view(&[good.clone(), junk.clone()], &opts).expect_err("junk must fail");
+    assert!(e.to_string().contains("junk.mcap"), "{e}");
+    assert!(!rrd.exists() && !partial.exists(), "left behind after: {e}");
+    view(&[good.clone()], &opts).expect("view");
+    assert!(rrd.is_file() && !partial.exists());
+    let before = std::fs::read(&rrd).expect("rrd");
+    view(&[good, junk], &opts).expect_err("junk must fail");
+    assert_eq!(
+        std::fs::read(&rrd).expect("rrd"),
+        before,
+        "the earlier file changed"
+    );
+    assert!(!partial.exists());
+}
+
 #[test]
 fn rrd_holds_bodies_poses_and_series_of_two_runs() {
     let dir = workdir("two-runs");

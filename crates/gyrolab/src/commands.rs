@@ -42,7 +42,8 @@ pub struct RunArgs {
     /// Design file or shipped design name, replacing the scene's.
     #[arg(long)]
     pub design: Option<String>,
-    /// Output file (default: recordings/<scene>.mcap).
+    /// Output file (default: recordings/<scene>.mcap); an existing folder gets
+    /// <folder>/<scene>.mcap.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// full, gyroscopic or linear.
@@ -82,11 +83,10 @@ fn overrides(a: &RunArgs) -> Result<SceneOverrides, CliError> {
         None => None,
     };
     let method = match &a.integrator {
-        Some(m) => Some(m.parse::<Method>().map_err(|e| {
-            bad(format!(
-                "--integrator: {e} (allowed: dopri5, dop853, vern9, rk4[:step_s], rodas4, radau5)"
-            ))
-        })?),
+        Some(m) => Some(
+            m.parse::<Method>()
+                .map_err(|e| bad(format!("--integrator: {e}")))?,
+        ),
         None => None,
     };
     for (name, v) in [
@@ -124,10 +124,14 @@ fn overrides(a: &RunArgs) -> Result<SceneOverrides, CliError> {
 
 pub fn run(a: RunArgs) -> Result<ExitCode, CliError> {
     let scene = Scene::load(&a.scene, &overrides(&a)?).map_err(bad)?;
-    let out = a
-        .output
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("recordings").join(format!("{}.mcap", scene.name)));
+    let file_name = format!("{}.mcap", scene.name);
+    // A folder given as the output takes the default file name, as `cp` would; found out
+    // before the run, not when its recording is renamed onto the folder at the end.
+    let out = match a.output.clone() {
+        Some(o) if o.is_dir() => o.join(file_name),
+        Some(o) => o,
+        None => PathBuf::from("recordings").join(file_name),
+    };
     let summary = record_scene(&scene, &out, a.quiet || a.json)?;
     print_summary(&summary, &scene, a.json);
     Ok(if summary.interrupted_at_s.is_some() {
@@ -487,8 +491,8 @@ pub fn compare(
     markdown: bool,
     json: bool,
 ) -> Result<ExitCode, CliError> {
-    std::fs::create_dir_all(out)
-        .map_err(|e| failed(format!("cannot create {}: {e}", out.display())))?;
+    // The plots' folder is made only once every run has been read (`write_plots`), so a bad
+    // input leaves nothing behind.
     let r = gyro_analysis::compare(runs, out).map_err(bad)?;
     if json {
         // The metrics table (one row per run) and the plots' paths.
@@ -686,11 +690,8 @@ pub fn accuracy(a: AccuracyArgs) -> Result<ExitCode, CliError> {
             .methods
             .iter()
             .map(|m| {
-                m.parse::<Method>().map_err(|e| {
-                    bad(format!(
-                        "--methods: {e} (allowed: dopri5, dop853, vern9, rk4, rodas4, radau5)"
-                    ))
-                })
+                m.parse::<Method>()
+                    .map_err(|e| bad(format!("--methods: {e}")))
             })
             .collect::<Result<_, _>>()?;
     }

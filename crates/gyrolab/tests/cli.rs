@@ -53,6 +53,53 @@ fn bad_input_exits_2_with_a_message_naming_the_file() {
         .output()
         .expect("runs");
     assert_eq!(out.status.code(), Some(2), "a foreign file is bad input");
+    // Neither `compare` nor `view` leaves an output behind for a file that is not a recording.
+    let junk = d.join("junk.mcap");
+    std::fs::write(&junk, b"not an MCAP file").expect("write");
+    let plots = d.join("plots");
+    let out = gyrolab()
+        .args(["compare", "--out"])
+        .arg(&plots)
+        .arg(&junk)
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("junk.mcap") && err.contains("MCAP magic"),
+        "{err}"
+    );
+    assert!(
+        !plots.exists(),
+        "compare made {} for bad input",
+        plots.display()
+    );
+    let rrd = d.join("junk.rrd");
+    let out = gyrolab()
+        .args(["view", "--save"])
+        .arg(&rrd)
+        .arg(&junk)
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        !rrd.exists() && !d.join("junk.rrd.partial").exists(),
+        "view left an .rrd for bad input"
+    );
+}
+
+/// `-o` naming an existing folder puts the recording in it under the scene's name, rather
+/// than running the scene and then failing to rename the recording onto the folder.
+#[test]
+fn run_into_a_folder_takes_the_scenes_name() {
+    let d = tmp("into-folder");
+    succeed(
+        gyrolab()
+            .args(["run", "harbour-50n", "--quiet", "--duration-s", "10", "-o"])
+            .arg(&d),
+    );
+    assert!(d.join("harbour-50n.mcap").is_file());
+    assert!(!d.join("harbour-50n.mcap.partial").exists());
 }
 
 #[test]
