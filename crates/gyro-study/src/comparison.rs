@@ -1075,7 +1075,12 @@ under oblique accelerations, §58). It is that lightly damped mode's resonance (
 /// What the comparison does not settle, whatever its numbers.
 const LIMITS: &str = "## Limits of this comparison\n\n\
 - The text gives neither the Hermione trial's latitude nor its deceleration: 50°N and 60 s are the scene's choice, and the \
-trial's periods (Slough > 85 min, three-gyro ≈ 70 min) are compared with the periods fitted on the 50°N release.\n\
+trial's periods (Slough > 85 min, three-gyro ≈ 70 min) are compared with the periods fitted on the 50°N release. The three-gyro is Schuler-tuned at 50°N (undamped 84.4 min there, and 67.7 min even \
+on the equator, the period going as 1/√cos L), and its oil lengthens the period ((55)'s exact complex pair: 116.0 min \
+at 50°N, 1.37×; the tank's own check at kal = 0.2 asks 1.21–1.29×): no latitude gives this design, or any \
+Schuler-tuned one damped so, a damped period near 70 min (≥ 81 min on the equator at 1.2×). The trial's 70 min \
+is near the undamped period south of ≈ 21°N, or a compass tuned shorter than the text's \"environ 80 minutes\" (L2611); the design is not \
+retuned against the text's own tuning, and the claim stays not reproduced.\n\
 - The back-swing is the card's rate 1 min after the speed change (a parabola through the next 3 min): the text's ζ′ \
 \"à la fin de la perturbation\", which for the Slough lasts until its 30-s mercury has followed (t₂, \"une ou deux \
 minutes\"; before that the sloshing swings the card at up to 4e-5 rad/s). The rate changes within minutes, the card \
