@@ -125,7 +125,7 @@ fn a_failed_view_leaves_no_rrd_behind() {
     let e = view(&[good.clone(), junk.clone()], &opts).expect_err("junk must fail");
     assert!(e.to_string().contains("junk.mcap"), "{e}");
     assert!(!rrd.exists() && !partial.exists(), "left behind after: {e}");
-    view(&[good.clone()], &opts).expect("view");
+    view(std::slice::from_ref(&good), &opts).expect("view");
     assert!(rrd.is_file() && !partial.exists());
     let before = std::fs::read(&rrd).expect("rrd");
     view(&[good, junk], &opts).expect_err("junk must fail");
