@@ -53,7 +53,8 @@ pub enum AnalysisError {
 }
 
 impl AnalysisError {
-    pub(crate) fn io(path: &Path, action: &'static str) -> impl FnOnce(std::io::Error) -> Self {
+    /// An [`AnalysisError::Io`] for `path`, to map an `std::io::Error` with.
+    pub fn io(path: &Path, action: &'static str) -> impl FnOnce(std::io::Error) -> Self {
         let path = path.to_path_buf();
         move |source| AnalysisError::Io {
             path,
@@ -62,9 +63,8 @@ impl AnalysisError {
         }
     }
 
-    pub(crate) fn polars(
-        context: impl Into<String>,
-    ) -> impl FnOnce(polars::error::PolarsError) -> Self {
+    /// An [`AnalysisError::Polars`] with its context, to map a `PolarsError` with.
+    pub fn polars(context: impl Into<String>) -> impl FnOnce(polars::error::PolarsError) -> Self {
         let context = context.into();
         move |source| AnalysisError::Polars { context, source }
     }

@@ -1,9 +1,11 @@
-//! Files written whole or not at all: every table, plot and baseline this crate writes goes
-//! through [`write_whole`], so a failure part-way (a full disk, a writer that refuses the
-//! frame) never leaves half a file under the final name.
+//! Files written whole or not at all: every table, plot and baseline this crate writes, and
+//! every file gyro-study and the command line write, goes through [`write_whole`], so a
+//! failure part-way (a full disk, a writer that refuses the frame) never leaves half a file
+//! under the final name. (Recordings have their own `.partial` life in gyro-mcap; a saved
+//! `.rrd` is renamed by gyro-view, as Rerun's sink writes the file itself.)
 
 use std::fs::File;
-use std::io::BufWriter;
+use std::io::{BufWriter, Write};
 use std::path::Path;
 
 use crate::error::{AnalysisError, Result};
@@ -11,7 +13,7 @@ use crate::error::{AnalysisError, Result};
 /// `fill` writes `<path>.partial` (the recorder's convention, [`gyro_mcap::partial_path`]),
 /// which is renamed to `path` once `fill` returns Ok and the data are flushed. On any error
 /// the partial file is removed and a file already at `path` is left as it was.
-pub(crate) fn write_whole(
+pub fn write_whole(
     path: &Path,
     fill: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
 ) -> Result<()> {
@@ -33,10 +35,17 @@ pub(crate) fn write_whole(
     result
 }
 
+/// [`write_whole`] with bytes already in memory.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_whole(path, |w| {
+        w.write_all(bytes)
+            .map_err(AnalysisError::io(path, "writing"))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::io::Write;
 
     #[test]
     fn a_failed_fill_leaves_the_old_file_and_no_partial() {

@@ -26,15 +26,15 @@
 //!   [`rolling`]: mean error under rolling; [`metrics`]: per-run analysis and the table;
 //!   [`compare`]: runs side by side; [`regress`]: the baseline check; [`plot`]: line plots as
 //!   SVG and PNG (also used by `gyrolab accuracy`); [`table`]: the aligned text and Markdown
-//!   tables every report and the CLI print; [`error`]: the crate's one error type; `file`: every
-//!   table, plot and baseline written whole (`<name>.partial`, renamed when complete).
+//!   tables every report and the CLI print; [`error`]: the crate's one error type; [`file`]: every
+//!   file written whole (`<name>.partial`, renamed when complete), also for gyro-study and the CLI.
 //!
 //! Units are SI inside (s, rad); renderers for people show minutes and degrees.
 
 pub mod ballistic;
 pub mod compare;
 pub mod error;
-mod file;
+pub mod file;
 pub mod fit;
 pub mod load;
 pub mod metrics;

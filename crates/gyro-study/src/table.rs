@@ -7,6 +7,8 @@
 
 use crate::plan::Plan;
 use gyro_analysis::RunMetrics;
+use gyro_analysis::error::AnalysisError;
+use gyro_analysis::file;
 use gyro_analysis::metrics::Cell;
 use polars::prelude::*;
 use std::fs::File;
@@ -54,19 +56,7 @@ pub fn parts_dir(out: &Path) -> PathBuf {
 /// Writes `bytes` to `path` through `path.partial` and a rename: never half a file under the
 /// final name.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    let tmp = partial_of(path);
-    std::fs::write(&tmp, bytes)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            format!("cannot write {}: {e}", path.display())
-        })
-}
-
-fn partial_of(path: &Path) -> PathBuf {
-    let mut s = path.as_os_str().to_owned();
-    s.push(".partial");
-    PathBuf::from(s)
+    file::write_bytes(path, bytes).map_err(|e| format!("cannot write {e}"))
 }
 
 /// The table's columns, in order, with their type.
@@ -163,20 +153,13 @@ pub fn to_dataframe(rows: &[Row], plan: &Plan) -> Result<DataFrame, String> {
 
 /// Writes a DataFrame as Parquet at `path` (through `.partial`).
 pub fn write_parquet(df: &mut DataFrame, path: &Path) -> Result<(), String> {
-    let tmp = partial_of(path);
-    let result = File::create(&tmp)
-        .map_err(|e| e.to_string())
-        .and_then(|file| {
-            ParquetWriter::new(file)
-                .finish(df)
-                .map(|_| ())
-                .map_err(|e| e.to_string())
-        })
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("cannot write {}: {e}", path.display())
+    file::write_whole(path, |w| {
+        ParquetWriter::new(w)
+            .finish(df)
+            .map(|_| ())
+            .map_err(AnalysisError::polars(path.display().to_string()))
     })
+    .map_err(|e| format!("cannot write {e}"))
 }
 
 /// Reads a Parquet file.

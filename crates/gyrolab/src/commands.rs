@@ -741,16 +741,7 @@ fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), CliError> {
         std::fs::create_dir_all(dir)
             .map_err(|e| failed(format!("cannot create {}: {e}", dir.display())))?;
     }
-    let tmp = path.with_extension(format!(
-        "{}.partial",
-        path.extension().and_then(|e| e.to_str()).unwrap_or("out")
-    ));
-    std::fs::write(&tmp, bytes)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            failed(format!("cannot write {}: {e}", path.display()))
-        })
+    gyro_analysis::file::write_bytes(path, bytes).map_err(|e| failed(format!("cannot write {e}")))
 }
 
 /// One log-log panel per case: achieved error against wall time, one curve per method (per
