@@ -42,6 +42,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use gyro_mcap::contract::run_record;
+use gyro_mcap::partial_path;
 use rerun::blueprint::{
     Blueprint, BlueprintPanel, ContainerLike, Horizontal, SelectionPanel, Spatial3DView,
     TextLogView, TimePanel, TimeSeriesView, Vertical,
@@ -442,13 +443,6 @@ fn fallback_rrd(first: &Path) -> PathBuf {
     first.with_extension("rrd")
 }
 
-/// Where a saved `.rrd` is written until it is whole: `<path>.partial`.
-fn partial(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".partial");
-    path.with_file_name(name)
-}
-
 /// Views recordings: logs them with [`default_fit`] and sends them to `opts.sink`.
 pub fn view(runs: &[PathBuf], opts: &ViewOptions) -> Result<ViewReport, ViewError> {
     view_with_fit(runs, opts, default_fit())
@@ -465,11 +459,12 @@ pub fn view_with_fit(
     let first = runs.first().ok_or(ViewError::NoRuns)?;
     let mut notes = Vec::new();
     let builder = RecordingStreamBuilder::new(APPLICATION_ID).default_enabled(true);
-    // A saved file is written under `<name>.partial` and renamed when whole: a run that fails
-    // half-way (an unreadable recording, a full disk) leaves no `.rrd` under the final name.
+    // A saved file is written under `<name>.partial` (the recorder's convention) and renamed
+    // when whole: a run that fails half-way (an unreadable recording, a full disk) leaves no
+    // `.rrd` under the final name.
     let (rec, output) = match &opts.sink {
         Sink::Save(path) => (
-            builder.save(partial(path))?,
+            builder.save(partial_path(path))?,
             Output::Saved {
                 path: path.clone(),
                 bytes: 0,
@@ -495,7 +490,7 @@ pub fn view_with_fit(
                     path.display()
                 ));
                 (
-                    builder.save(partial(&path))?,
+                    builder.save(partial_path(&path))?,
                     Output::Saved { path, bytes: 0 },
                 )
             }
@@ -515,14 +510,14 @@ pub fn view_with_fit(
         Ok(s) => s,
         Err(e) => {
             if let Output::Saved { path, .. } = &output {
-                let _ = std::fs::remove_file(partial(path));
+                let _ = std::fs::remove_file(partial_path(path));
             }
             return Err(e);
         }
     };
     let output = match output {
         Output::Saved { path, .. } => {
-            let tmp = partial(&path);
+            let tmp = partial_path(&path);
             let bytes = std::fs::rename(&tmp, &path)
                 .and_then(|()| std::fs::metadata(&path))
                 .map_err(|source| ViewError::Io {
