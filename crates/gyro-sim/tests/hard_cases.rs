@@ -19,7 +19,7 @@ use support::*;
 // Helpers
 
 /// The stiff integrators every stiff hard case runs with.
-const STIFF: [Method; 2] = [Method::Rodas4, Method::Radau5];
+const STIFF: [Method; 3] = [Method::Rodas4, Method::Rodas5p, Method::Radau5];
 
 fn foucault_scene(design: &str, lat: f64, start_extra: &str, ring_elev: f64) -> Scene {
     scene_from(

@@ -78,6 +78,7 @@ fn allocations_do_not_grow_with_steps() {
         Method::Vern9,
         Method::Rk4 { step_s: 1e-2 },
         Method::Rodas4,
+        Method::Rodas5p,
         Method::Radau5,
     ] {
         let (short, short_steps) = allocations_for(method, 10.0);

@@ -49,7 +49,7 @@ pub struct RunArgs {
     /// full, gyroscopic or linear.
     #[arg(long)]
     pub fidelity: Option<String>,
-    /// dopri5, dop853, vern9, rk4[:step_s], rodas4 or radau5.
+    /// dopri5, dop853, vern9, rk4[:step_s], rodas4, rodas5p or radau5.
     #[arg(long)]
     pub integrator: Option<String>,
     #[arg(long)]

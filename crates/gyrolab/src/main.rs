@@ -136,7 +136,7 @@ enum Command {
         /// Error the one-line verdicts aim at.
         #[arg(long)]
         target_error: Option<f64>,
-        /// Integrators to study, comma-separated (default: dopri5,dop853,rodas4,radau5,rk4).
+        /// Integrators to study, comma-separated (default: dopri5,dop853,vern9,rodas4,rodas5p,radau5,rk4).
         #[arg(long, value_delimiter = ',')]
         methods: Vec<String>,
         /// List the cases and exit.

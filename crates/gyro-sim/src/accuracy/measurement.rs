@@ -318,7 +318,7 @@ impl Case {
                         // Verner's 9(8): |R(−x)| ≤ 1 up to x ≈ 4.48 (its stability
                         // polynomial from the tableau).
                         Method::Vern9 => 16.0 * self.t_end * rho / 4.48,
-                        Method::Rodas4 | Method::Radau5 => 0.0,
+                        Method::Rodas4 | Method::Rodas5p | Method::Radau5 => 0.0,
                     };
                     if predicted * rhs_cost > opts.max_point_s {
                         let why = format!(

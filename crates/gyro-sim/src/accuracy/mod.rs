@@ -86,6 +86,7 @@ impl Default for StudyOptions {
                 Method::Dop853,
                 Method::Vern9,
                 Method::Rodas4,
+                Method::Rodas5p,
                 Method::Radau5,
                 Method::Rk4 {
                     step_s: Method::DEFAULT_RK4_STEP_S,

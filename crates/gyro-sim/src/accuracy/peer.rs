@@ -176,9 +176,10 @@ pub fn peer_report(opts: &StudyOptions) -> Result<PeerReport, StudyError> {
             Method::Vern9,
             Method::Dopri5,
             Method::Rodas4,
+            Method::Rodas5p,
             Method::Radau5,
         ] {
-            let implicit = matches!(method, Method::Rodas4 | Method::Radau5);
+            let implicit = matches!(method, Method::Rodas4 | Method::Rodas5p | Method::Radau5);
             points.extend(villarceau_points(
                 opts, &sim, v, amplitude, t_end, method, &tol,
             ));
@@ -249,7 +250,7 @@ fn villarceau_points(
     method: Method,
     tol: &Tolerances,
 ) -> Vec<PeerPoint> {
-    let implicit = matches!(method, Method::Rodas4 | Method::Radau5);
+    let implicit = matches!(method, Method::Rodas4 | Method::Rodas5p | Method::Radau5);
     let w0 = v.g_over_a.abs().sqrt();
     let mut points = Vec::new();
     let end_error =

@@ -6,7 +6,8 @@ use std::fmt::Write as _;
 /// One run of one configuration.
 #[derive(Clone, Debug, Serialize)]
 pub struct Point {
-    /// `dopri5`, `dop853`, `rodas4`, `radau5`, `rk4`, or `expm` (exact propagation of `linear`).
+    /// `dopri5`, `dop853`, `vern9`, `rodas4`, `rodas5p`, `radau5`, `rk4`, or `expm` (exact
+    /// propagation of `linear`).
     pub method: String,
     pub fidelity: String,
     /// Relative tolerance asked for (for RK4: the tolerance its step was chosen from).
