@@ -221,6 +221,13 @@ impl StiffOscillator {
             r[0][1] * x[0] + r[1][1] * x[1],
         ]
     }
+    /// Largest error of the slow mode's position over a run's samples (its amplitude is 1).
+    fn slow_error(&self, r: &Run) -> f64 {
+        r.samples
+            .iter()
+            .map(|(t, xs)| (self.modal(xs)[0] - self.modal(&self.exact(*t))[0]).abs())
+            .fold(0.0, f64::max)
+    }
 }
 impl OdeSystem for StiffOscillator {
     fn dim(&self) -> usize {
@@ -745,11 +752,7 @@ fn stiff_oscillatory_rodas4_steps_over_fast_mode() {
         );
         assert!(rodas.stats.jacobian_evals > 0);
         // Slow mode at every sample against exact (amplitude 1).
-        let mut slow_err: f64 = 0.0;
-        for (t, xs) in &rodas.samples {
-            let exact = p.modal(&p.exact(*t))[0];
-            slow_err = slow_err.max((p.modal(xs)[0] - exact).abs());
-        }
+        let slow_err = p.slow_error(&rodas);
         assert!(slow_err < 1e-4, "slow mode error {slow_err:e}");
     }
 }
@@ -1469,22 +1472,16 @@ fn stiff_oscillatory_rodas5p_takes_fewer_steps_than_rodas4() {
             let mut p = StiffOscillator::new(use_jacobian);
             let r4 = solve(&mut p, Method::Rodas4, &t, 2000.0, 10.0, &[]);
             let r5 = solve(&mut p, Method::Rodas5p, &t, 2000.0, 10.0, &[]);
-            let slow_err = |r: &Run| {
-                r.samples
-                    .iter()
-                    .map(|(t, xs)| (p.modal(xs)[0] - p.modal(&p.exact(*t))[0]).abs())
-                    .fold(0.0, f64::max)
-            };
             eprintln!(
                 "stiff rtol {rtol:e} (exact jacobian {use_jacobian}): rodas4 {} steps / {} rejected / {} rhs, slow err {:.2e}; rodas5p {} steps / {} rejected / {} rhs, slow err {:.2e}",
                 r4.stats.steps,
                 r4.stats.rejected_steps,
                 r4.stats.rhs_evals,
-                slow_err(&r4),
+                p.slow_error(&r4),
                 r5.stats.steps,
                 r5.stats.rejected_steps,
                 r5.stats.rhs_evals,
-                slow_err(&r5),
+                p.slow_error(&r5),
             );
             assert!(
                 r5.stats.steps * 3 < r4.stats.steps * 2,
@@ -1495,9 +1492,9 @@ fn stiff_oscillatory_rodas5p_takes_fewer_steps_than_rodas4() {
             assert!(r5.stats.rhs_evals < r4.stats.rhs_evals);
             for (name, r) in [("rodas4", &r4), ("rodas5p", &r5)] {
                 assert!(
-                    slow_err(r) < 10.0 * rtol,
+                    p.slow_error(r) < 10.0 * rtol,
                     "rtol {rtol:e}: {name} slow mode error {:e}",
-                    slow_err(r)
+                    p.slow_error(r)
                 );
             }
         }
@@ -1514,30 +1511,24 @@ fn stiff_oscillatory_radau5_holds_longer_steps_than_rodas4_at_tight_tolerance() 
         let mut p = StiffOscillator::new(use_jacobian);
         let rodas = solve(&mut p, Method::Rodas4, &t, 2000.0, 10.0, &[]);
         let radau = solve(&mut p, Method::Radau5, &t, 2000.0, 10.0, &[]);
-        let slow_err = |r: &Run| {
-            r.samples
-                .iter()
-                .map(|(t, xs)| (p.modal(xs)[0] - p.modal(&p.exact(*t))[0]).abs())
-                .fold(0.0, f64::max)
-        };
         eprintln!(
             "stiff rtol 1e-10 (exact jacobian {use_jacobian}): rodas4 {} steps / {} rhs / {} lu, slow err {:.2e}; radau5 {} steps / {} rhs / {} jac / {} lu, slow err {:.2e}",
             rodas.stats.steps,
             rodas.stats.rhs_evals,
             rodas.stats.lu_decompositions,
-            slow_err(&rodas),
+            p.slow_error(&rodas),
             radau.stats.steps,
             radau.stats.rhs_evals,
             radau.stats.jacobian_evals,
             radau.stats.lu_decompositions,
-            slow_err(&radau),
+            p.slow_error(&radau),
         );
         assert!(radau.stats.steps * 2 < rodas.stats.steps);
         assert!(
-            slow_err(&radau) <= 2.0 * slow_err(&rodas),
+            p.slow_error(&radau) <= 2.0 * p.slow_error(&rodas),
             "slow mode error {:e} vs rodas4 {:e}",
-            slow_err(&radau),
-            slow_err(&rodas)
+            p.slow_error(&radau),
+            p.slow_error(&rodas)
         );
     }
 }
