@@ -121,8 +121,10 @@ def attempt(run):
         return None
 
 
-def best_time(fn, min_total=0.2, max_reps=5):
-    """Best wall time of fn() over a few repetitions; returns (result of the first run, time)."""
+def best_time(fn, min_total=0.2, max_reps=1000):
+    """Best wall time of fn() over repetitions until min_total seconds went into them (at most
+    max_reps), as timeit's autorange; gyrolab's side times its points the same way. Returns
+    (result of the first run, time)."""
     t0 = time.perf_counter()
     first = fn()
     best = time.perf_counter() - t0
