@@ -100,6 +100,25 @@ impl<S: OdeSystem> OdeSystem for Budget<S> {
     }
 }
 
+/// Where a point of the study is taken: fidelity (index and name), method, tolerance, and the
+/// case's spectral radius and RHS cost at that fidelity.
+struct Setting {
+    fi: usize,
+    fidelity: Fidelity,
+    method: Method,
+    rtol: f64,
+    rho: f64,
+    rhs_cost: f64,
+}
+
+/// A method's progress along the tolerances of one case and fidelity: time spent, and why its
+/// remaining points are skipped once they are.
+#[derive(Default)]
+struct Track {
+    stopped: Option<String>,
+    spent: f64,
+}
+
 impl Case {
     fn tolerances(&self, rtol: f64) -> Tolerances {
         Tolerances {
@@ -267,106 +286,26 @@ impl Case {
             }
             let rho = self.spectral_radius(fi);
             let rhs_cost = self.rhs_cost_s(fi);
-            for &m in &opts.methods {
-                let mut stopped: Option<String> = None;
-                let mut spent = 0.0;
-                for &rtol in &opts.tolerances {
-                    if stopped.is_none() && spent > opts.max_method_s {
-                        stopped = Some(format!(
-                            "skipped: {} already spent on this case (budget {})",
-                            fmt_time(spent),
-                            fmt_time(opts.max_method_s)
-                        ));
-                    }
-                    let method = match m {
-                        Method::Rk4 { .. } => Method::Rk4 {
-                            step_s: rk4_step(self.t_char, rtol).min(if rho > 0.0 {
-                                2.5 / rho
-                            } else {
-                                f64::INFINITY
-                            }),
-                        },
-                        other => other,
-                    };
-                    let mut p = Point {
-                        method: method.to_string(),
-                        fidelity: fidelity.to_string(),
+            // Tolerance-major: every method's point at one tolerance, then the next tolerance,
+            // reported method by method. The host runs slow or fast for seconds at a time:
+            // measured a method at a time, one method's whole curve could fall in a slow
+            // stretch and lose a verdict it wins in the next run (docs/accuracy.md).
+            let mut tracks: Vec<Track> = opts.methods.iter().map(|_| Track::default()).collect();
+            let mut curves: Vec<Vec<Point>> = opts.methods.iter().map(|_| Vec::new()).collect();
+            for &rtol in &opts.tolerances {
+                for ((&m, track), curve) in opts.methods.iter().zip(&mut tracks).zip(&mut curves) {
+                    let at = Setting {
+                        fi,
+                        fidelity,
+                        method: m,
                         rtol,
-                        step_s: match method {
-                            Method::Rk4 { step_s } => Some(step_s),
-                            _ => None,
-                        },
-                        error: None,
-                        wall_s: 0.0,
-                        rhs_evals: 0,
-                        jacobian_evals: 0,
-                        lu_decompositions: 0,
-                        steps: 0,
-                        rejected_steps: 0,
-                        note: None,
+                        rho,
+                        rhs_cost,
                     };
-                    if let Some(why) = &stopped {
-                        p.note = Some(why.clone());
-                        points.push(p);
-                        continue;
-                    }
-                    // Explicit methods: the stiffest mode bounds the step whatever the tolerance.
-                    let predicted = match method {
-                        Method::Rk4 { step_s } => 4.0 * self.t_end / step_s,
-                        Method::Dopri5 => 6.0 * self.t_end * rho / 3.3,
-                        Method::Dop853 => 12.0 * self.t_end * rho / 6.0,
-                        // Verner's 9(8): |R(−x)| ≤ 1 up to x ≈ 4.48 (its stability
-                        // polynomial from the tableau).
-                        Method::Vern9 => 16.0 * self.t_end * rho / 4.48,
-                        Method::Rodas4 | Method::Rodas5p | Method::Radau5 => 0.0,
-                    };
-                    if predicted * rhs_cost > opts.max_point_s {
-                        let why = format!(
-                            "skipped: stability- or step-bound, ≈ {predicted:.1e} RHS ≈ {} predicted",
-                            fmt_time(predicted * rhs_cost)
-                        );
-                        p.note = Some(why.clone());
-                        stopped = Some(why);
-                        points.push(p);
-                        continue;
-                    }
-                    let deadline = 3.0 * opts.max_point_s;
-                    let started = Instant::now();
-                    let (res, wall) = timed(opts, || self.solve(fi, method, rtol, deadline));
-                    spent += started.elapsed().as_secs_f64();
-                    p.wall_s = wall;
-                    match res {
-                        Ok((err, stats)) => {
-                            p.error = Some(err);
-                            p.rhs_evals = stats.rhs_evals;
-                            p.jacobian_evals = stats.jacobian_evals;
-                            p.lu_decompositions = stats.lu_decompositions;
-                            p.steps = stats.steps;
-                            p.rejected_steps = stats.rejected_steps;
-                        }
-                        Err(e) if e == OVER_BUDGET => {
-                            let why = format!(
-                                "stopped: over the time budget of {} (tighter tolerances skipped)",
-                                fmt_time(deadline)
-                            );
-                            p.note = Some(why.clone());
-                            stopped =
-                                Some("skipped: a looser tolerance was over the time budget".into());
-                        }
-                        Err(e) => p.note = Some(format!("failed: {e}")),
-                    }
-                    points.push(p);
-                    // At its stability limit RK4's step no longer follows the tolerance: the
-                    // remaining points would repeat this one.
-                    if let Method::Rk4 { step_s } = method
-                        && step_s < rk4_step(self.t_char, rtol)
-                    {
-                        stopped = Some(format!(
-                            "skipped: RK4 at its stability limit h = {step_s:.2e} s (same as above)"
-                        ));
-                    }
+                    curve.push(self.point(opts, &at, track));
                 }
             }
+            points.extend(curves.into_iter().flatten());
         }
         let mut report = CaseReport {
             name: self.name.clone(),
@@ -384,6 +323,103 @@ impl Case {
         };
         report.verdict = verdict(&report, opts.target_error);
         report
+    }
+
+    /// One point: `at`'s method at `at`'s tolerance, unless `track` says its method has stopped
+    /// on this case (over its budget, or RK4 at its stability limit).
+    fn point(&self, opts: &StudyOptions, at: &Setting, track: &mut Track) -> Point {
+        if track.stopped.is_none() && track.spent > opts.max_method_s {
+            track.stopped = Some(format!(
+                "skipped: {} already spent on this case (budget {})",
+                fmt_time(track.spent),
+                fmt_time(opts.max_method_s)
+            ));
+        }
+        let (fi, rtol) = (at.fi, at.rtol);
+        let method = match at.method {
+            Method::Rk4 { .. } => Method::Rk4 {
+                step_s: rk4_step(self.t_char, rtol).min(if at.rho > 0.0 {
+                    2.5 / at.rho
+                } else {
+                    f64::INFINITY
+                }),
+            },
+            other => other,
+        };
+        let mut p = Point {
+            method: method.to_string(),
+            fidelity: at.fidelity.to_string(),
+            rtol,
+            step_s: match method {
+                Method::Rk4 { step_s } => Some(step_s),
+                _ => None,
+            },
+            error: None,
+            wall_s: 0.0,
+            rhs_evals: 0,
+            jacobian_evals: 0,
+            lu_decompositions: 0,
+            steps: 0,
+            rejected_steps: 0,
+            note: None,
+        };
+        if let Some(why) = &track.stopped {
+            p.note = Some(why.clone());
+            return p;
+        }
+        // Explicit methods: the stiffest mode bounds the step whatever the tolerance.
+        let predicted = match method {
+            Method::Rk4 { step_s } => 4.0 * self.t_end / step_s,
+            Method::Dopri5 => 6.0 * self.t_end * at.rho / 3.3,
+            Method::Dop853 => 12.0 * self.t_end * at.rho / 6.0,
+            // Verner's 9(8): |R(−x)| ≤ 1 up to x ≈ 4.48 (its stability
+            // polynomial from the tableau).
+            Method::Vern9 => 16.0 * self.t_end * at.rho / 4.48,
+            Method::Rodas4 | Method::Rodas5p | Method::Radau5 => 0.0,
+        };
+        if predicted * at.rhs_cost > opts.max_point_s {
+            let why = format!(
+                "skipped: stability- or step-bound, ≈ {predicted:.1e} RHS ≈ {} predicted",
+                fmt_time(predicted * at.rhs_cost)
+            );
+            p.note = Some(why.clone());
+            track.stopped = Some(why);
+            return p;
+        }
+        let deadline = 3.0 * opts.max_point_s;
+        let started = Instant::now();
+        let (res, wall) = timed(opts, || self.solve(fi, method, rtol, deadline));
+        track.spent += started.elapsed().as_secs_f64();
+        p.wall_s = wall;
+        match res {
+            Ok((err, stats)) => {
+                p.error = Some(err);
+                p.rhs_evals = stats.rhs_evals;
+                p.jacobian_evals = stats.jacobian_evals;
+                p.lu_decompositions = stats.lu_decompositions;
+                p.steps = stats.steps;
+                p.rejected_steps = stats.rejected_steps;
+            }
+            Err(e) if e == OVER_BUDGET => {
+                let why = format!(
+                    "stopped: over the time budget of {} (tighter tolerances skipped)",
+                    fmt_time(deadline)
+                );
+                p.note = Some(why.clone());
+                track.stopped = Some("skipped: a looser tolerance was over the time budget".into());
+            }
+            Err(e) => p.note = Some(format!("failed: {e}")),
+        }
+        // At its stability limit RK4's step no longer follows the tolerance: the
+        // remaining points would repeat this one.
+        if let Method::Rk4 { step_s } = method
+            && step_s < rk4_step(self.t_char, rtol)
+        {
+            track.stopped = Some(format!(
+                "skipped: RK4 at its stability limit h = {step_s:.2e} s (same as above)"
+            ));
+        }
+        p
     }
 
     /// Spectral radius of the Jacobian at the start (fidelity `fi`).
