@@ -516,6 +516,7 @@ impl SampleClock {
         }
     }
 
+    #[inline]
     fn peek(&self) -> Option<f64> {
         if self.done {
             return None;
@@ -528,6 +529,7 @@ impl SampleClock {
         })
     }
 
+    #[inline]
     fn advance(&mut self) {
         if self.peek() == Some(self.t_end) {
             self.done = true;
