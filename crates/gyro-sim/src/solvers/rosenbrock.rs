@@ -8,7 +8,10 @@
 //! on a stationary base does: the difference is then exactly zero); J once per run instead
 //! when the system says it is constant (a `linear` model); one LU of (1/(γh)) I − J
 //! (partial pivoting, `linalg`; a model's kinematic rows q̇ = v eliminated first, so an 8-state
-//! `full` model factors a 4-square matrix); s − 1 further rhs calls for s stages. Stage i
+//! `full` model factors a 4-square matrix), and from its factors the explicit inverse, so
+//! that each stage's solve is one product (`IterationMatrix::with_inverse`: the s solves that
+//! follow a factorisation are then sums, not chains of substitutions); s − 1 further rhs
+//! calls for s stages. Stage i
 //! solves (1/(γh) I − J) kᵢ = f(x + Σ aᵢⱼkⱼ) + Σ (cᵢⱼ/h) kⱼ + h dᵢ ∂f/∂t. Both methods are
 //! stiffly accurate: their last stages start from the previous stage's point plus its
 //! increment, and the last increment is the error estimate (the difference between the
@@ -126,7 +129,7 @@ impl<M: Method> Rosenbrock<M> {
             jac_current: false,
             jac_kept: false,
             kinematic: 0,
-            matrix: IterationMatrix::new(n),
+            matrix: IterationMatrix::with_inverse(n),
             ak: std::array::from_fn(|s| vec![0.0; if s < Self::T.stages { n } else { 0 }]),
             dy: vec![0.0; n],
             x_stage: vec![0.0; n],
