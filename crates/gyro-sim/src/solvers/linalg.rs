@@ -337,9 +337,10 @@ impl IterationMatrix {
     /// product K (r₁, r₂) and the pairs' recovery: a sum whose terms are all known at once, not
     /// the substitutions' chain of dependent steps (a forward level and a backward level per
     /// unknown, each waiting on the last). For up to 16 states left (sizes monomorphised; the
-    /// whole matrix, m = 0, included), larger ones keep the substitutions. Forming K costs about
-    /// two factorisations' work, so this is for a matrix that many solves follow (a Rosenbrock
-    /// step's 6–8 stages), not one or two (RADAU5's real matrix per Newton iteration). The
+    /// whole matrix, m = 0, included), larger ones keep the substitutions. Forming K costs
+    /// (n − m) solves for S⁻¹ and m·(n − m)² products for S⁻¹G, several factorisations' work,
+    /// so this is for a matrix that many solves follow (a Rosenbrock step's 6–8 stages), not
+    /// one or two (RADAU5's real matrix per Newton iteration). The
     /// results differ from the substitutions' by rounding (the unit tests below hold both to the
     /// whole factorisation and to the residual).
     ///
@@ -474,8 +475,9 @@ impl IterationMatrix {
         ))
     }
 
-    /// The solve with m > 0 rows eliminated and R = n − m left, R in registers: r₂ gathered by
-    /// S's permutation, plus G r₁ column by column, S's substitutions, then u (and v).
+    /// The solve with m rows eliminated and R = n − m left, R in registers: K (r₁, r₂) (with
+    /// the inverse), or r₂ gathered by S's permutation, plus G r₁ column by column, S's
+    /// substitutions; then u (and v).
     fn reduced_solve<const R: usize>(&self, rhs: &mut [f64]) {
         let (r1, r2) = rhs[..self.n].split_at_mut(self.m);
         if self.inverse {
