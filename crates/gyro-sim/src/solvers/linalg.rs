@@ -376,13 +376,19 @@ impl IterationMatrix {
         m
     }
 
+    /// Whether a factorisation with `m` rows eliminated is the whole matrix's pivoted LU and
+    /// its substitutions: m = 0, unless the product form takes it (up to 16 states).
+    fn factored_whole(&self, m: usize) -> bool {
+        m == 0 && !(self.inverse && self.n <= 16)
+    }
+
     /// Factors c·I − `jac`, eliminating the first `m` rows (see [`Self::kinematic_rows`]).
     /// Returns false if the matrix is singular.
     pub(crate) fn factor(&mut self, jac: &[f64], m: usize, c: f64) -> bool {
         let r = self.n - m;
         self.m = m;
         self.g = 1.0 / c;
-        if m == 0 && !(self.inverse && r <= 16) {
+        if self.factored_whole(m) {
             let n = self.n;
             for (e, &v) in self.lu.iter_mut().zip(jac) {
                 *e = -v;
@@ -467,7 +473,7 @@ impl IterationMatrix {
     /// Solves (c·I − J) y = `b` in place.
     pub(crate) fn solve(&self, rhs: &mut [f64]) {
         let (m, r) = (self.m, self.n - self.m);
-        if m == 0 && !(self.inverse && r <= 16) {
+        if self.factored_whole(m) {
             return lu_solve(&self.lu[..r * r], r, &self.piv[..2 * r], &mut rhs[..r]);
         }
         by_size!(r, R => self.reduced_solve::<R>(rhs), _ => unreachable!(
