@@ -299,9 +299,11 @@ pub(crate) struct IterationMatrix {
     /// 1/c.
     g: f64,
     /// LU factors of S ((n − m)², row-major), as [`lu_decompose`] leaves them.
+    /// With the product form: only for a whole matrix above `REDUCED_MAX` states.
     lu: Vec<f64>,
     piv: Vec<usize>,
-    /// Gᵀ (m × (n − m), row-major), its columns in S's row permutation.
+    /// Gᵀ (m × (n − m), row-major), its columns in S's row permutation (not kept with the
+    /// product form: K holds S⁻¹G).
     gt: Vec<f64>,
     /// Pair j solved for c·u_j (true) or for v_j.
     stiff: Vec<bool>,
@@ -311,6 +313,10 @@ pub(crate) struct IterationMatrix {
     kt: Vec<f64>,
 }
 
+/// The most states a reduced (or product-form) factorisation leaves: its arrays are sized at
+/// compile time, by `by_size!`, up to here.
+const REDUCED_MAX: usize = 16;
+
 /// Whether kinematic pair j is solved for c·u_j: B's column j (`b_col`, 1-norm) against |c|
 /// times the 1-norm of (c I − R)'s column j (`s_col`).
 fn solve_for_position(b_col: f64, c_abs: f64, s_col: f64) -> bool {
@@ -319,17 +325,7 @@ fn solve_for_position(b_col: f64, c_abs: f64, s_col: f64) -> bool {
 
 impl IterationMatrix {
     pub(crate) fn new(n: usize) -> Self {
-        IterationMatrix {
-            n,
-            m: 0,
-            g: 0.0,
-            lu: vec![0.0; n * n],
-            piv: vec![0; 2 * n],
-            gt: vec![0.0; n * n],
-            stiff: vec![false; n],
-            inverse: false,
-            kt: Vec::new(),
-        }
+        Self::with_form(n, false)
     }
 
     /// The same, but each factorisation also forms S⁻¹ (the (n − m)-square inverse, from the
@@ -350,10 +346,28 @@ impl IterationMatrix {
     /// with K (0.93×), the same steps, RHS calls and error (8.4555e-5), the samples' checksum
     /// moved in the 15th digit.
     pub(crate) fn with_inverse(n: usize) -> Self {
+        Self::with_form(n, true)
+    }
+
+    /// Storage for the form chosen: the product form keeps K, and S's factors only for a whole
+    /// matrix too large for it; the substitutions keep S's factors and Gᵀ.
+    fn with_form(n: usize, inverse: bool) -> Self {
+        let lu = if !inverse || n > REDUCED_MAX {
+            n * n
+        } else {
+            0
+        };
+        let (gt, kt) = if inverse { (0, n * n) } else { (n * n, 0) };
         IterationMatrix {
-            inverse: true,
-            kt: vec![0.0; n * n],
-            ..Self::new(n)
+            n,
+            m: 0,
+            g: 0.0,
+            lu: vec![0.0; lu],
+            piv: vec![0; 2 * n],
+            gt: vec![0.0; gt],
+            stiff: vec![false; n],
+            inverse,
+            kt: vec![0.0; kt],
         }
     }
 
@@ -363,8 +377,7 @@ impl IterationMatrix {
         let Some(m) = jac[..n].iter().position(|&v| v != 0.0) else {
             return 0;
         };
-        // (At most 16 states left: the reduced solve is monomorphised up to there.)
-        if m == 0 || 2 * m > n || n - m > 16 {
+        if m == 0 || 2 * m > n || n - m > REDUCED_MAX {
             return 0;
         }
         for i in 0..m {
@@ -379,7 +392,7 @@ impl IterationMatrix {
     /// Whether a factorisation with `m` rows eliminated is the whole matrix's pivoted LU and
     /// its substitutions: m = 0, unless the product form takes it (up to 16 states).
     fn factored_whole(&self, m: usize) -> bool {
-        m == 0 && !(self.inverse && self.n <= 16)
+        m == 0 && !(self.inverse && self.n <= REDUCED_MAX)
     }
 
     /// Factors c·I − `jac`, eliminating the first `m` rows (see [`Self::kinematic_rows`]).
@@ -954,10 +967,13 @@ mod tests {
                 let mut y_whole = b0.clone();
                 assert!(lu_decompose(&mut whole, n, &mut piv));
                 lu_solve(&whole, n, &piv, &mut y_whole);
-                for (form, mut im) in [
+                for (f, (form, mut im)) in [
                     ("substitution", IterationMatrix::new(n)),
                     ("inverse", IterationMatrix::with_inverse(n)),
-                ] {
+                ]
+                .into_iter()
+                .enumerate()
+                {
                     assert!(im.factor(&jac, m, c));
                     let mut y = b0.clone();
                     im.solve(&mut y);
@@ -977,8 +993,7 @@ mod tests {
                         .zip(&y_whole)
                         .map(|(a, b)| (a - b).abs())
                         .fold(0.0, f64::max);
-                    let k = usize::from(form == "inverse");
-                    worst[k] = worst[k].max(w);
+                    worst[f] = worst[f].max(w);
                     assert!(
                         diff <= 1e-9 * scale,
                         "{form}: m {m} n {n} stiff {stiff} c {c}: {diff:e}"
@@ -988,17 +1003,21 @@ mod tests {
         }
         assert!(worst[0] < 1e-14, "backward error {:e}", worst[0]);
         assert!(worst[1] < 1e-14, "backward error (inverse) {:e}", worst[1]);
-        // m = 0 is the whole factorisation itself (with the inverse: of the whole matrix).
-        let jac = entries(5, 36);
-        for mut im in [IterationMatrix::new(6), IterationMatrix::with_inverse(6)] {
-            assert!(im.factor(&jac, 0, 2.0));
-            let mut y = entries(6, 6);
-            let b0 = y.clone();
-            im.solve(&mut y);
-            for i in 0..6 {
-                let r: f64 =
-                    2.0 * y[i] - b0[i] - (0..6).map(|j| jac[i * 6 + j] * y[j]).sum::<f64>();
-                assert!(r.abs() < 1e-13, "{r:e}");
+        // m = 0 is the whole factorisation itself: with the inverse, the whole matrix's up to
+        // `REDUCED_MAX` states, and above that pivoted LU, whose factors the product form then
+        // keeps (its storage is sized by the form).
+        for (n, c) in [(6, 2.0), (REDUCED_MAX + 4, 8.0)] {
+            let jac = entries(5, n * n);
+            for mut im in [IterationMatrix::new(n), IterationMatrix::with_inverse(n)] {
+                assert!(im.factor(&jac, 0, c));
+                let mut y = entries(6, n);
+                let b0 = y.clone();
+                im.solve(&mut y);
+                for i in 0..n {
+                    let r: f64 =
+                        c * y[i] - b0[i] - (0..n).map(|j| jac[i * n + j] * y[j]).sum::<f64>();
+                    assert!(r.abs() < 1e-13, "n {n}: {r:e}");
+                }
             }
         }
     }
