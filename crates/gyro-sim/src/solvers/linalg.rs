@@ -349,26 +349,26 @@ impl IterationMatrix {
         Self::with_form(n, true)
     }
 
-    /// Storage for the form chosen: the product form keeps K, and S's factors only for a whole
-    /// matrix too large for it; the substitutions keep S's factors and Gᵀ.
+    /// Storage for the form chosen: the product form keeps K, the substitutions Gᵀ, and S's
+    /// factors are kept wherever a whole factorisation can happen ([`Self::factored_whole`]
+    /// with m = 0: always for the substitutions, above `REDUCED_MAX` states for the product).
     fn with_form(n: usize, inverse: bool) -> Self {
-        let lu = if !inverse || n > REDUCED_MAX {
-            n * n
-        } else {
-            0
-        };
         let (gt, kt) = if inverse { (0, n * n) } else { (n * n, 0) };
-        IterationMatrix {
+        let mut matrix = IterationMatrix {
             n,
             m: 0,
             g: 0.0,
-            lu: vec![0.0; lu],
+            lu: Vec::new(),
             piv: vec![0; 2 * n],
             gt: vec![0.0; gt],
             stiff: vec![false; n],
             inverse,
             kt: vec![0.0; kt],
+        };
+        if matrix.factored_whole(0) {
+            matrix.lu = vec![0.0; n * n];
         }
+        matrix
     }
 
     /// How many leading rows of the row-major n × n `jac` are kinematic (row i exactly the unit
@@ -390,7 +390,7 @@ impl IterationMatrix {
     }
 
     /// Whether a factorisation with `m` rows eliminated is the whole matrix's pivoted LU and
-    /// its substitutions: m = 0, unless the product form takes it (up to 16 states).
+    /// its substitutions: m = 0, unless the product form takes it (up to `REDUCED_MAX` states).
     fn factored_whole(&self, m: usize) -> bool {
         m == 0 && !(self.inverse && self.n <= REDUCED_MAX)
     }
