@@ -240,40 +240,88 @@ fn azimuth_modes_are_the_roots_of_eq_55() {
 }
 
 /// §68 at kal = 0.2 (the design's tank): the shipped b is the flow of the largest azimuth
-/// log-decrement from (55) (within 1 %); the engine's azimuth pair has that decrement and period
-/// within 3 %. The exact roots give a log-decrement of 2.24 and a period 1.29 × 2π√K (natural) or
-/// 1.37 × 2π√K (damped); the text's "1.2" and "1.8" are its approximations (errata).
+/// damping factor −p from (55) (within 1 %), the text's "maximum d'amortissement"; the engine's
+/// azimuth pair has that damping factor and period within 3 %. There the exact roots give the
+/// period factors the errata gives for the text's "1.2" — 1.21 × 2π√K natural (2π/|r|, the
+/// definition of (69)) and 1.29 × 2π√K damped (2π/q) — and a log-decrement ≈ 2.1–2.2 (the text's
+/// "1.8" is not reproducible).
 #[test]
 fn the_shipped_flow_is_the_optimum_of_eq_55() {
     let d = design(50.0, &[], &[]);
     let th = theory(&d, 50.0);
     let y_opt = th.optimal_flow();
     let b_opt = 1.0 / y_opt;
-    let (dec, period) = th.tank_oscillation(y_opt).expect("oscillates");
+    let (re, im) = th.tank_pair(y_opt).expect("oscillates");
+    let (dec, period) = (TAU * -re / im, TAU / im);
+    let natural = TAU / re.hypot(im);
     let two_pi_sqrt_k = TAU * th.tank_big_k().sqrt();
     let kal = th.tank_k() * th.areas[0] / 2.07;
     let ms = modes(&compile(d, 50.0, Fidelity::Full, true));
-    let (m, _) = nearest(&ms, (0.0, TAU / period));
-    let (dec_e, period_e) = (TAU * -m.0 / m.1, TAU / m.1);
+    let (m, _) = nearest(&ms, (re, im));
     println!(
-        "kal {kal:.3}: optimal b {b_opt:.5e} s/m² (shipped {:.5e}); (55): log-decrement {dec:.3}, period {:.1} s = {:.3} × 2π√K (natural: {:.3}); engine: {dec_e:.3}, {period_e:.1} s",
+        "kal {kal:.3}: optimal b {b_opt:.5e} s/m² (shipped {:.5e}); (55): −p {:.4e} /s, log-decrement {dec:.3}, period {period:.1} s = {:.3} × 2π√K (natural: {:.3}); engine: −p {:.4e} /s, period {:.1} s",
         th.flow_resistance,
-        period,
+        -re,
         period / two_pi_sqrt_k,
-        // The natural period 2π/|r|, |r| = (1/T)·√(4π² + δ²)·… in the pair's own terms.
-        period / (1.0 + (dec / TAU).powi(2)).sqrt() / two_pi_sqrt_k,
+        natural / two_pi_sqrt_k,
+        -m.0,
+        TAU / m.1,
     );
     assert!((kal - 0.2).abs() < 5e-3, "kal");
     assert!(
         (th.flow_resistance / b_opt - 1.0).abs() < 0.01,
         "shipped b optimal"
     );
-    assert!((dec_e / dec - 1.0).abs() < 0.03, "log-decrement");
-    assert!((period_e / period - 1.0).abs() < 0.03, "period");
-    assert!((2.0..2.4).contains(&dec), "decrement {dec}");
+    assert!((m.0 / re - 1.0).abs() < 0.03, "damping factor");
+    assert!((im / m.1 - 1.0).abs() < 0.03, "period");
+    assert!(
+        (natural / two_pi_sqrt_k / 1.21 - 1.0).abs() < 0.03,
+        "natural period factor"
+    );
+    assert!(
+        (period / two_pi_sqrt_k / 1.29 - 1.0).abs() < 0.03,
+        "damped period factor"
+    );
+    assert!((2.1..2.25).contains(&dec), "decrement {dec}");
     // Optimal: a flow 30 % off either way damps less.
     for f in [0.7, 1.3] {
-        assert!(th.tank_oscillation(y_opt * f).expect("oscillates").0 < dec);
+        assert!(-th.tank_pair(y_opt * f).expect("oscillates").0 < -re);
+    }
+}
+
+/// §70 (L3123, with the errata): at §68's maximum damping the back-swing (77),
+/// 𝓗ζ′ = −(Πf − ϖE)k y δv/g, is "exactement le double" of the Slough's −8μπ²/(T²ε cos L)·δv/g at
+/// equal period and damping — 2m₂/m₃ (2.056 for table (61)) — with T and μ as the text defines
+/// them: 4π²/T² = p² + q² = |r|² ((22), (69)) and μ = p, r = −p ± iq the azimuth root. With the
+/// exact roots of (55) the ratio is (Πf − ϖE)k y ε cos L/(2𝓗 μ |r|²) = k y/(2 μ |r|² K): 2m₂/m₃
+/// within 1 % at the shipped flow (and within 5 % with the engine's root), but not with the
+/// damped period 2π/q (≈ 2.3), nor at other flows.
+#[test]
+fn the_backswing_is_twice_the_sloughs_at_maximum_damping() {
+    let d = design(50.0, &[], &[]);
+    let th = theory(&d, 50.0);
+    let [_, m2, m3] = th.tank_m();
+    let twice = 2.0 * m2 / m3;
+    let (k, kk) = (th.tank_k(), th.tank_big_k());
+    let ratio = |y: f64, (re, im): (f64, f64)| k * y / (2.0 * -re * (re * re + im * im) * kk);
+    let y = 1.0 / th.flow_resistance;
+    let root = th.tank_pair(y).expect("oscillates");
+    let ms = modes(&compile(d, 50.0, Fidelity::Full, true));
+    let (engine, _) = nearest(&ms, root);
+    let damped = k * y / (2.0 * -root.0 * root.1 * root.1 * kk);
+    let (half, double) = (
+        ratio(0.5 * y, th.tank_pair(0.5 * y).expect("oscillates")),
+        ratio(2.0 * y, th.tank_pair(2.0 * y).expect("oscillates")),
+    );
+    println!(
+        "2m₂/m₃ = {twice:.4}; (77) over the Slough's formula at equal T = 2π/|r| and μ: (55) {:.4}, engine {:.4}; with 2π/q {damped:.4}; at y/2 {half:.4}, 2y {double:.4}",
+        ratio(y, root),
+        ratio(y, engine)
+    );
+    assert!((ratio(y, root) / twice - 1.0).abs() < 0.01, "(55)");
+    assert!((ratio(y, engine) / twice - 1.0).abs() < 0.05, "engine");
+    for r in [damped, half, double] {
+        assert!((r / twice - 1.0).abs() > 0.05, "{r}");
     }
 }
 
@@ -551,9 +599,9 @@ fn gyroscopic_fidelity_keeps_alpha_and_agrees_with_full() {
 /// tubes toward its new rest. The engine's level equations (the `gyroscopic` Jacobian's rows of
 /// the levels, θ held) give the same motion as Beghin's (70)–(71) — h₁ = h₈, h₂ = h₇, h₄ = −h₁,
 /// h₃ = −h₂ — within 1 % over the first quarter period, and after a quarter of the damped
-/// period of (55) at the optimal flow (29 min here; the text's compass, 20 min) the oil has made
-/// most of its travel: 0.94 (h₁) and 0.95 (h₂) here, the text's "0.9 and 0.95" (errata: its
-/// printed modal coefficients do not satisfy (70)–(71)).
+/// period of (55) at §68's optimal flow (27 min here; the text's compass, 20 min) the oil has
+/// made most of its travel: 0.90 (h₁) and 0.92 (h₂) here, the text's "0.9 and 0.95" (errata:
+/// its printed modal coefficients do not satisfy (70)–(71)).
 #[test]
 fn the_oil_follows_a_held_tilt_as_eqs_70_71() {
     let d = design(50.0, &[], &[]);

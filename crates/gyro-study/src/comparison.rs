@@ -126,6 +126,10 @@ pub struct Constants {
     /// 𝓗ζ′ = −(Πf − ϖE)k y δv_x/g from its own numbers (y = 1/b its tubes' flow), magnitude,
     /// rad/s.
     pub three_gyro_backswing_77_rad_per_s: Option<f64>,
+    /// Each design's azimuth root r = −μ + iq (re, im; 1/s) from the engine's linearisation of
+    /// its 50°N release (the complex pair nearest the release's fitted oscillation): the period
+    /// 2π/|r| and damping factor μ of §70's back-swing formula, as (22) and (69) define them.
+    pub azimuth_roots_50n: BTreeMap<String, (f64, f64)>,
 }
 
 fn find<'a>(entries: &'a [Entry], scene: &str, design: &str) -> Option<&'a Entry> {
@@ -220,17 +224,38 @@ fn period_and_decay(entries: &[Entry], design: &str) -> Option<(f64, f64)> {
 
 /// Beghin §70's back-swing of a design in the Hermione trial, normalised by its own period and
 /// damping: ζ′ T² ε cos L / (8π² μ |δv|/g), 1 for the Slough's formula (magnitude), and the
-/// swing and rate themselves.
+/// swing and rate themselves; with T and μ of its azimuth root from the linearisation.
+///
+/// T is 2π/|r|, not the damped period 2π/q: the Slough's period is defined by (22),
+/// 4π²/T² = ε cos L (K − ap)/(−IΩ), the undamped stiffness over the momentum, which is |r|²
+/// for its pair −μ ± iq; the three-gyro's by (69), p² + q² = |r|². It is under these
+/// definitions, at §68's maximum damping factor, that (77) is 2m₂/m₃ ≈ 2.06 times the Slough's
+/// formula, whatever kal (the exact roots of (55) give 2.061 at kal = 0.1, 0.2 and 0.25; with
+/// 2π/q, 2.08, 2.31 and 3.14). The root comes from the linearisation, not the release's fit: the
+/// three-gyro's release mixes the oil's slow real root of (55) into its oscillation.
 fn backswing(entries: &[Entry], design: &str, k: &Constants) -> Option<(f64, f64, f64, f64, f64)> {
     let e = find(entries, HERMIONE, design)?;
     let rate = e.metric("ballistic_backswing_rate_rad_per_s")?;
     let swing = e.metric("ballistic_swing_rad")?;
-    let (t, mu) = period_and_decay(entries, design)?;
+    let &(re, im) = k.azimuth_roots_50n.get(design)?;
+    let (t, mu) = (2.0 * PI / re.hypot(im), -re);
     let dv = k.hermione_delta_v_m_per_s?;
     let lat = k.hermione_latitude_rad?;
     let slough_formula = 8.0 * mu * PI * PI / (t * t * EARTH_RATE_RAD_PER_S * lat.cos()) * dv.abs()
         / STANDARD_GRAVITY_M_PER_S2;
     Some((rate, swing, t, mu, rate.abs() / slough_formula))
+}
+
+/// The same normalised with the damped period 2π/q and the decay fitted on the 50°N release
+/// (the normaliser until 2026-12-08), for the record beside the modal one.
+fn backswing_fitted(entries: &[Entry], design: &str, k: &Constants) -> Option<f64> {
+    let rate = find(entries, HERMIONE, design)?.metric("ballistic_backswing_rate_rad_per_s")?;
+    let (t, mu) = period_and_decay(entries, design)?;
+    let (dv, lat) = (k.hermione_delta_v_m_per_s?, k.hermione_latitude_rad?);
+    Some(
+        rate.abs() * t * t * EARTH_RATE_RAD_PER_S * lat.cos() * STANDARD_GRAVITY_M_PER_S2
+            / (8.0 * mu * PI * PI * dv.abs()),
+    )
 }
 
 /// The text's comparative claims checked against the entries. Tolerances are stated in each
@@ -428,7 +453,7 @@ fn slough_backswing(entries: &[Entry], k: &Constants) -> Claim {
         "slough-backswing",
         "Slough, Hermione trial: after a speed change heading North the mercury drives the card back at once, against its deviation, at ζ′ = −8μπ²/(T²ε cos L)·δv/g (§70, L3116–3123)",
         &[SLOUGH],
-        "back-swing rate (1 min after the change: \"à la fin de la perturbation\", once the mercury has followed) opposite to the swing, its magnitude within 15 % of the formula with T and μ fitted on the Slough's 50°N release",
+        "back-swing rate (1 min after the change: \"à la fin de la perturbation\", once the mercury has followed) opposite to the swing, its magnitude within 15 % of the formula with T = 2π/|r| (the period (22) defines) and μ = −Re r of the Slough's azimuth root r, from the linearisation at 50°N",
     );
     match backswing(entries, SLOUGH, k) {
         Some((rate, swing, t, mu, norm)) => {
@@ -457,7 +482,7 @@ fn three_gyro_backswing_twice_slough(entries: &[Entry], k: &Constants) -> Claim 
         "three-gyro-backswing-twice-slough",
         "Anschütz three-gyro 1912, Hermione trial: its oil drives the card back after a speed change at exactly twice the Slough's rate at equal period and damping (§70, L3123; 2m₂/m₃ ≈ 2.06 by the errata)",
         &[THREE_GYRO_1912, SLOUGH],
-        "both back-swings opposite to their swings; the ratio of the back-swing rates, each normalised by 8μπ²/(T²ε cos L)·|δv|/g with its own fitted T and μ, within 2.06 ± 25 %",
+        "both back-swings opposite to their swings; the ratio of the back-swing rates, each normalised by 8μπ²/(T²ε cos L)·|δv|/g with its own T = 2π/|r| and μ = −Re r (the definitions of (22) and (69) under which 2.06 holds; r its azimuth root from the linearisation at 50°N), within 2.06 ± 25 %",
     );
     match (
         backswing(entries, THREE_GYRO_1912, k),
@@ -472,6 +497,18 @@ fn three_gyro_backswing_twice_slough(entries: &[Entry], k: &Constants) -> Claim 
                 deg(rs) * 3600.0,
                 r3.abs() / rs.abs()
             );
+            if let (Some(f3), Some(fs)) = (
+                backswing_fitted(entries, THREE_GYRO_1912, k),
+                backswing_fitted(entries, SLOUGH, k),
+            ) {
+                // The earlier normaliser, for the record: damped period and decay fitted on
+                // the release; the 2.06 does not hold under that period's definition.
+                c.measured += &format!(
+                    "; with the release's fitted 2π/q and decay instead: {f3:.2} and {fs:.2}, ratio {:.2}",
+                    f3 / fs
+                );
+                c.values.insert("fitted_ratio".into(), f3 / fs);
+            }
             if let Some(r77) = k.three_gyro_backswing_77_rad_per_s {
                 // The text's own closed form for the rate, beside the "twice" it derives from it.
                 c.measured += &format!(
@@ -713,6 +750,28 @@ pub fn constants(plan: &Plan, entries: &[Entry]) -> Constants {
                 * dv.abs()
                 / STANDARD_GRAVITY_M_PER_S2,
         );
+    }
+    // The azimuth root of the back-swing's normaliser: the linearisation's complex pair nearest
+    // the oscillation fitted on the release.
+    for design in [SLOUGH, THREE_GYRO_1912] {
+        if let Some((s, _)) = scene_of(HARBOUR_50N, design)
+            && let Some((t, mu)) = period_and_decay(entries, design)
+            && let Ok(sim) = gyro_sim::Simulation::new(&s)
+        {
+            let fitted = (-mu, 2.0 * PI / t);
+            let root = sim
+                .model
+                .modes()
+                .into_iter()
+                .filter(|r| r.1 > 0.0)
+                .min_by(|a, b| {
+                    let d = |r: &(f64, f64)| (r.0 - fitted.0).hypot(r.1 - fitted.1);
+                    d(a).total_cmp(&d(b))
+                });
+            if let Some(r) = root {
+                k.azimuth_roots_50n.insert(design.to_string(), r);
+            }
+        }
     }
     k
 }
@@ -1076,21 +1135,25 @@ under oblique accelerations, §58). It is that lightly damped mode's resonance (
 const LIMITS: &str = "## Limits of this comparison\n\n\
 - The text gives neither the Hermione trial's latitude nor its deceleration: 50°N and 60 s are the scene's choice, and the \
 trial's periods (Slough > 85 min, three-gyro ≈ 70 min) are compared with the periods fitted on the 50°N release. The three-gyro is Schuler-tuned at 50°N (undamped 84.4 min there, and 67.7 min even \
-on the equator, the period going as 1/√cos L), and its oil lengthens the period ((55)'s exact complex pair: 116.0 min \
-at 50°N, 1.37×; the tank's own check at kal = 0.2 asks 1.21–1.29×): no latitude gives this design, or any \
-Schuler-tuned one damped so, a damped period near 70 min (≥ 81 min on the equator at 1.2×). The trial's 70 min \
-is near the undamped period south of ≈ 21°N, or a compass tuned shorter than the text's \"environ 80 minutes\" (L2611); the design is not \
-retuned against the text's own tuning, and the claim stays not reproduced.\n\
+on the equator, the period going as 1/√cos L), and its oil lengthens the period ((55)'s exact complex pair at §68's maximum \
+damping: 108.6 min at 50°N, 1.29× (2π/q; 1.22× natural, 2π/|r|), the text's \"1,2\" and the tank's own check at kal = 0.2): \
+no latitude gives this design, or any Schuler-tuned one damped so, a damped period near 70 min (≥ 81 min on the equator even at \
+1.2×). The trial's 70 min is near the undamped period south of ≈ 21°N, or a compass tuned shorter than the text's \"environ \
+80 minutes\" (L2594); the design is not retuned against the text's own tuning, and the claim stays not reproduced.\n\
 - The back-swing is the card's rate 1 min after the speed change (a parabola through the next 3 min): the text's ζ′ \
 \"à la fin de la perturbation\", which for the Slough lasts until its 30-s mercury has followed (t₂, \"une ou deux \
 minutes\"; before that the sloshing swings the card at up to 4e-5 rad/s). The rate changes within minutes, the card \
-starting off its new equilibrium: a mean over 2–8 min (the earlier reading) gave the Slough 0.75 of its formula and \
-the three-gyro/Slough ratio 2.69. Read so, the Slough follows its formula and the three-gyro the text's own (77), \
-𝓗ζ′ = −(Πf − ϖE)k y δv/g from its numbers (0.84 of it 1 min on, while its rate falls ≈ 11 % a minute; 0.94 at the \
-stop), yet its rate is 3.3 × the Slough formula at its own T and μ, not the 2.06 the text derives from (77) with \
-§68's approximate damping and period. T and μ are fitted on the 50°N release, where the oil's slow real root of (55) \
-joins the oscillation (log-decrement 1.86 against 2.25 for (55)'s exact complex pair, period 117.4 against \
-116.0 min); with the exact pair's T and μ the three-gyro's normalised back-swing is 2.6.\n\
+starting off its new equilibrium. Read so, the Slough follows its formula and the three-gyro the text's own (77), \
+𝓗ζ′ = −(Πf − ϖE)k y δv/g from its numbers (0.85 of it 1 min on, while its rate falls ≈ 11 % a minute). Each is \
+normalised by its own period and damping as the text defines them: T = 2π/|r| ((22) for the Slough, 4π²/T² the \
+stiffness over the momentum; (69) for the three-gyro, p² + q²) and μ = −Re r, r the azimuth root of the engine's \
+linearisation at 50°N. Under these definitions, and at §68's maximum damping factor, the exact roots of (55) make (77) \
+2m₂/m₃ ≈ 2.06 times the Slough's formula (`three_gyro::the_backswing_is_twice_the_sloughs_at_maximum_damping` in \
+gyro-sim's tests); with the damped period 2π/q they make it 2.31. Until 2026-12-08 the three-gyro's tubes were set for \
+the largest log-decrement instead (≈ 14 % more flow, where (55) gives 2.75, or 3.10 with 2π/q) and the verdict \
+normalised by the period and decay fitted on the release: ratio 2.97, not reproduced. That fit is biased for the \
+three-gyro, whose release mixes the oil's slow real root of (55) into its oscillation (log-decrement 1.83 against 2.18 \
+for the exact pair, period 110.9 against 108.6 min); the table gives the ratio under that normaliser too.\n\
 - Rolling errors are taken net of the reading each rolling run starts from: the rolling scenes have no azimuth offset, so \
 they start at rest at the design's calm equilibrium (the Anschütz 1906 is compensated at 50°N, the others carry their own \
 latitude errors). The harbour releases' *steady* is no substitute: 6 h after a 5° release the three-gyro (the oil's slow \
