@@ -1157,7 +1157,7 @@ for the exact pair, period 110.9 against 108.6 min); the table gives the ratio u
 - Rolling errors are taken net of the reading each rolling run starts from: the rolling scenes have no azimuth offset, so \
 they start at rest at the design's calm equilibrium (the Anschütz 1906 is compensated at 50°N, the others carry their own \
 latitude errors). The harbour releases' *steady* is no substitute: 6 h after a 5° release the three-gyro (the oil's slow \
-real root of (55)) and the twin-gyro are still 0.064° and 0.052° from equilibria of 0.000° at 50°N, and drifting \
+real root of (55)) and the twin-gyro are still 0.074° and 0.052° from equilibria of 0.000° at 50°N, and drifting \
 (`steady_drift_rad_per_s` in the table); their harbour *steady* columns carry that.\n\
 - The rolling scenes integrate with DOP853 (rtol 1e-7, atol 1e-6) like the shipped rolling scenes; a study sets one \
 integrator per scene, not per design, so a design with very stiff parts (a many-compartment tank) runs explicit there.\n\
